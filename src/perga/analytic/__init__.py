@@ -1,0 +1,2 @@
+"""The analytical models: the paper as published, the physically consistent models, impact laws
+and contact calibration."""
