@@ -1,0 +1,193 @@
+"""The case-file schema: pydantic models whose fields carry SI units and allowed ranges.
+
+Unknown keys are errors (``extra="forbid"``). Each field's description states its unit and
+range; ``perga schema`` prints the JSON Schema built from these models.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from perga.analytic.hammer import PlateHammer
+
+
+class Strict(BaseModel):
+    """Base of every case-file table: unknown keys are errors, values are immutable."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Rotor(Strict):
+    """[rotor]: the rotor turning at constant angular velocity."""
+
+    plane: Literal["horizontal", "vertical"] = Field(
+        "horizontal",
+        description="plane of rotation: 'horizontal' (vertical axis, gravity presses granules "
+        "on the floor) or 'vertical' (gravity acts in the plane)",
+    )
+    omega: float | None = Field(
+        None, gt=0, le=2000, description="angular velocity, rad/s, in (0, 2000]; or give rpm"
+    )
+    rpm: float | None = Field(
+        None, gt=0, le=20000, description="angular velocity, rev/min, in (0, 20000]; or omega"
+    )
+    radius: float = Field(0.15, gt=0, le=5, description="rotor disc radius, m, in (0, 5]")
+
+    @model_validator(mode="after")
+    def _one_speed(self) -> Rotor:
+        if (self.omega is None) == (self.rpm is None):
+            raise ValueError("give exactly one of omega (rad/s) or rpm (rev/min)")
+        return self
+
+    @property
+    def angular_velocity(self) -> float:
+        """ω, rad/s."""
+        return self.omega if self.omega is not None else self.rpm * 2 * math.pi / 60
+
+
+class PlateShape(Strict):
+    """[hammers.shape] with kind = "plate": a rectangular plate hinged on its axis."""
+
+    kind: Literal["plate"] = "plate"
+    length: float = Field(gt=0, le=2, description="length along the hammer axis, m, in (0, 2]")
+    width: float = Field(gt=0, le=1, description="width across the axis, m, in (0, 1]")
+    hinge_offset: float = Field(
+        0.0, ge=0, description="distance from the inner end to the hinge, m, in [0, length/2)"
+    )
+    strike_distance: float | None = Field(
+        None,
+        gt=0,
+        description="distance a from the hinge to the striking point K, m, in (0, length − "
+        "hinge_offset]; default: the centre of percussion clipped to the plate",
+    )
+
+
+class Hammers(Strict):
+    """[hammers]: identical hammers spaced evenly around the rotor."""
+
+    count: int = Field(4, ge=1, le=64, description="number of hammers, in [1, 64]")
+    mass: float = Field(gt=0, le=50, description="mass of one hammer, kg, in (0, 50]")
+    hinge_radius: float = Field(
+        ge=0, le=5, description="radius R of the hinge (or weld) point, m, in [0, 5]"
+    )
+    mount: Literal["hinged", "welded"] = Field(
+        "hinged", description="'hinged' (free to swing on a pivot) or 'welded' to the rotor"
+    )
+    material: str = Field("steel", description="name of a [materials] entry")
+    shape: PlateShape
+
+    @model_validator(mode="after")
+    def _hinge_on_plate(self) -> Hammers:
+        if self.shape.hinge_offset >= self.shape.length / 2:
+            raise ValueError(
+                f"shape.hinge_offset must be < length/2 = {self.shape.length / 2} m "
+                f"(got {self.shape.hinge_offset})"
+            )
+        return self
+
+    def plate(self, density: float) -> PlateHammer:
+        """The plate hammer (thickness from mass and density, kg/m³)."""
+        s = self.shape
+        thickness = self.mass / (density * s.length * s.width)
+        return PlateHammer(s.length, s.width, thickness, density, s.hinge_offset)
+
+
+class Granules(Strict):
+    """[granules]: bee-bread granules (discs in the plane)."""
+
+    radius: float = Field(gt=0, le=0.05, description="disc radius, m, in (0, 0.05]")
+    mass: float = Field(gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]")
+    material: str = Field("beebread", description="name of a [materials] entry")
+
+
+class Material(Strict):
+    """[materials.NAME]."""
+
+    density: float = Field(gt=0, le=30000, description="density, kg/m³, in (0, 30000]")
+
+
+class ContactPair(Strict):
+    """[[contacts]]: restitution and friction of one pair of materials."""
+
+    pair: tuple[str, str] = Field(description="two [materials] names (order does not matter)")
+    restitution: float = Field(ge=0, le=1, description="coefficient of restitution e, in [0, 1]")
+    friction: float = Field(ge=0, le=2, description="Coulomb friction coefficient f, in [0, 2]")
+
+
+class PaperStudy(Strict):
+    """[paper]: the inputs of ``perga paper-check`` that the paper states itself."""
+
+    x0: float = Field(0.08, gt=0, description="initial displacement after impact, m")
+    decay_times: tuple[float, float] = Field(
+        (0.02, 0.05), description="times of the quoted decays, s"
+    )
+    decay_fractions: tuple[float, float] = Field(
+        (0.6, 0.8), description="quoted minimum fractional decreases of x at decay_times"
+    )
+    final_radius: float = Field(0.02, gt=0, description="r must fall below this by t2, m")
+    efficiency_hammer_masses: tuple[float, float, float] = Field(
+        (0.005, 0.1, 0.2), description="hammer masses of the quoted efficiencies, kg"
+    )
+    efficiency_values: tuple[float, float, float] = Field(
+        (0.0075, 0.001, 0.0005),
+        description="quoted efficiencies (0.7-0.8 %, 0.1 %, below 0.05 %) as fractions",
+    )
+    successive_radii: tuple[float, ...] = Field(
+        (0.080, 0.045, 0.028, 0.015), description="radii after successive impacts, m"
+    )
+    successive_loss_by_third: float = Field(
+        0.7, description="quoted minimum fraction of energy dissipated by the third impact"
+    )
+    loss_per_impact: float = Field(
+        0.2, description="quoted minimum fraction of granule KE lost in one impact at e"
+    )
+
+
+MaterialName = Annotated[str, Field(min_length=1)]
+
+
+class Case(Strict):
+    """A perga case file."""
+
+    title: str = Field("", description="one-line title")
+    description: str = Field("", description="free text: what the case is for")
+    rotor: Rotor
+    hammers: Hammers
+    granules: Granules
+    materials: dict[MaterialName, Material]
+    contacts: list[ContactPair] = Field(min_length=1)
+    gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")
+    paper: PaperStudy | None = Field(None, description="inputs of perga paper-check")
+
+    @model_validator(mode="after")
+    def _names_resolve(self) -> Case:
+        names = set(self.materials)
+        used = [("hammers.material", self.hammers.material)]
+        used.append(("granules.material", self.granules.material))
+        used += [(f"contacts[{i}].pair", n) for i, c in enumerate(self.contacts) for n in c.pair]
+        missing = [f"{key} = {name!r}" for key, name in used if name not in names]
+        if missing:
+            raise ValueError(
+                f"unknown material {', '.join(missing)}; defined: {', '.join(sorted(names))}"
+            )
+        return self
+
+    def contact(self, a: str, b: str) -> ContactPair:
+        """The [[contacts]] entry of materials a and b (KeyError if there is none)."""
+        for pair in self.contacts:
+            if sorted(pair.pair) == sorted((a, b)):
+                return pair
+        raise KeyError(f"no [[contacts]] entry for the pair ({a}, {b})")
+
+    @property
+    def granule_hammer_contact(self) -> ContactPair:
+        """The contact between the granule and hammer materials."""
+        return self.contact(self.granules.material, self.hammers.material)
+
+    @property
+    def hammer_plate(self) -> PlateHammer:
+        """The hammer as a plate of its material's density."""
+        return self.hammers.plate(self.materials[self.hammers.material].density)
