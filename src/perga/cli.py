@@ -1,0 +1,91 @@
+"""The ``perga`` command line: parses, calls the library, prints.
+
+Exit codes: 0 success, 2 bad input (the problems are printed, never a traceback), 1 a failed run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from perga import __version__
+from perga.case import CaseError, load_case
+
+BUNDLED_CASES = Path(__file__).resolve().parents[2] / "cases"
+
+
+def _default_case(name: str) -> Path:
+    """A bundled case: ./cases/NAME if present, else the one beside the installed sources."""
+    local = Path("cases") / name
+    return local if local.exists() else BUNDLED_CASES / name
+
+
+def _paper_check(args: argparse.Namespace) -> int:
+    from perga.studies.paper_check import Params, check_paper
+    from perga.studies.paper_report import format_json, format_markdown, format_text, write_plots
+
+    start = time.perf_counter()
+    fitted, realistic = load_case(args.fitted), load_case(args.realistic)
+    rows = check_paper(fitted, realistic)
+    fit_p, real_p = Params.from_case(fitted), Params.from_case(realistic)
+    if args.format == "json":
+        print(format_json(rows, fit_p, real_p))
+    elif args.format == "markdown":
+        print(format_markdown(rows), end="")
+    else:
+        print(format_text(rows))
+    if args.plots:
+        paths = write_plots(rows, fit_p, real_p, Path(args.plots))
+        print(f"wrote {len(paths)} plots to {args.plots}", file=sys.stderr)
+    verdicts = [r.fitted.verdict for r in rows]
+    print(
+        f"{len(rows)} rows: {verdicts.count('yes')} reproduced, {verdicts.count('partly')} partly, "
+        f"{verdicts.count('no')} not (fitted set); {time.perf_counter() - start:.2f} s",
+        file=sys.stderr,
+    )
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every subcommand."""
+    parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"perga {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    check = sub.add_parser(
+        "paper-check",
+        help="evaluate every numerical claim of the paper under fitted and realistic parameters",
+    )
+    check.add_argument(
+        "--fitted",
+        type=Path,
+        default=_default_case("paper-fitted.toml"),
+        help="case with the parameters fitted to the paper (default: cases/paper-fitted.toml)",
+    )
+    check.add_argument(
+        "--realistic",
+        type=Path,
+        default=_default_case("paper-realistic.toml"),
+        help="case with realistic parameters (default: cases/paper-realistic.toml)",
+    )
+    check.add_argument("--format", choices=("text", "markdown", "json"), default="text")
+    check.add_argument("--plots", metavar="DIR", help="write one PNG per claim into DIR")
+    check.set_defaults(handler=_paper_check)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``perga`` console script."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except CaseError as exc:
+        for problem in exc.problems:
+            print(f"error: {problem}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
