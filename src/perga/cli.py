@@ -49,6 +49,29 @@ def _paper_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _validate(args: argparse.Namespace) -> int:
+    failed = 0
+    for path in args.cases:
+        try:
+            load_case(path)
+        except CaseError as exc:
+            failed += 1
+            for problem in exc.problems:
+                print(f"error: {problem}", file=sys.stderr)
+        else:
+            print(f"ok: {path}")
+    return 2 if failed else 0
+
+
+def _schema(args: argparse.Namespace) -> int:
+    from perga.case.reference import json_schema, markdown_reference
+
+    print(
+        markdown_reference() if args.markdown else json_schema(), end="" if args.markdown else "\n"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
@@ -73,6 +96,12 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--format", choices=("text", "markdown", "json"), default="text")
     check.add_argument("--plots", metavar="DIR", help="write one PNG per claim into DIR")
     check.set_defaults(handler=_paper_check)
+    validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
+    validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
+    validate.set_defaults(handler=_validate)
+    schema = sub.add_parser("schema", help="print the case-file JSON Schema")
+    schema.add_argument("--markdown", action="store_true", help="the reference docs/case-files.md")
+    schema.set_defaults(handler=_schema)
     return parser
 
 

@@ -14,6 +14,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
+from perga.case.checks import check_case
 from perga.case.schema import Case
 
 
@@ -58,7 +59,11 @@ def _describe(error: dict[str, Any]) -> str:
 
 
 def load_case(path: str | Path) -> Case:
-    """Parse and validate a case file; raises :class:`CaseError` listing every problem."""
+    """Parse and validate a case file; raises :class:`CaseError` listing every problem.
+
+    The schema's problems are all reported at once; the physical cross-checks
+    (:mod:`perga.case.checks`) need valid fields, so they run, all of them, once the schema passes.
+    """
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -67,6 +72,10 @@ def load_case(path: str | Path) -> Case:
     except tomllib.TOMLDecodeError as exc:
         raise CaseError([f"{path}: not valid TOML: {exc}"]) from None
     try:
-        return Case.model_validate(data)
+        case = Case.model_validate(data)
     except ValidationError as exc:
         raise CaseError([f"{path}: {_describe(err)}" for err in exc.errors()]) from None
+    problems = check_case(case)
+    if problems:
+        raise CaseError([f"{path}: {problem}" for problem in problems])
+    return case

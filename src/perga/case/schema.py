@@ -35,6 +35,15 @@ class Rotor(Strict):
         None, gt=0, le=20000, description="angular velocity, rev/min, in (0, 20000]; or omega"
     )
     radius: float = Field(0.15, gt=0, le=5, description="rotor disc radius, m, in (0, 5]")
+    inertia: float | None = Field(
+        None,
+        gt=0,
+        description="moment of inertia about the axis, kg·m², > 0; omit for a rotor held at "
+        "constant ω (needs the rotor_inertia effect)",
+    )
+    torque_limit: float | None = Field(
+        None, gt=0, description="drive torque limit, N·m, > 0 (with inertia)"
+    )
 
     @model_validator(mode="after")
     def _one_speed(self) -> Rotor:
@@ -77,6 +86,12 @@ class Hammers(Strict):
         "hinged", description="'hinged' (free to swing on a pivot) or 'welded' to the rotor"
     )
     material: str = Field("steel", description="name of a [materials] entry")
+    angles: tuple[float, ...] | None = Field(
+        None, description="hinge angles on the rotor, rad, one per hammer; default: evenly spaced"
+    )
+    hinge_friction: float = Field(
+        0.0, ge=0, le=100, description="Coulomb friction torque at the hinge, N·m, in [0, 100]"
+    )
     shape: PlateShape
 
     @model_validator(mode="after")
@@ -95,12 +110,53 @@ class Hammers(Strict):
         return PlateHammer(s.length, s.width, thickness, density, s.hinge_offset)
 
 
+class ExplicitPlacement(Strict):
+    """[granules.placement] kind = "explicit": every granule's position (and velocity)."""
+
+    kind: Literal["explicit"]
+    positions: list[tuple[float, float]] = Field(
+        min_length=1, description="centre of each granule, m, in the fixed frame"
+    )
+    velocities: list[tuple[float, float]] | None = Field(
+        None, description="velocity of each granule, m/s; default: at rest"
+    )
+
+
+class RingPlacement(Strict):
+    """[granules.placement] kind = "ring": evenly spaced on a circle about the axis."""
+
+    kind: Literal["ring"]
+    radius: float = Field(gt=0, le=5, description="ring radius, m, in (0, 5]")
+    phase: float = Field(0.0, description="angle of the first granule, rad")
+
+
+class RandomPlacement(Strict):
+    """[granules.placement] kind = "random": a non-overlapping random pack in an annulus."""
+
+    kind: Literal["random"]
+    inner_radius: float = Field(ge=0, le=5, description="inner radius of the annulus, m")
+    outer_radius: float = Field(gt=0, le=5, description="outer radius of the annulus, m")
+    seed: int = Field(0, ge=0, description="seed of the random generator, >= 0")
+
+
+Placement = Annotated[
+    ExplicitPlacement | RingPlacement | RandomPlacement, Field(discriminator="kind")
+]
+
+
 class Granules(Strict):
     """[granules]: bee-bread granules (discs in the plane)."""
 
+    count: int = Field(1, ge=1, le=1_000_000, description="number of granules, in [1, 1e6]")
     radius: float = Field(gt=0, le=0.05, description="disc radius, m, in (0, 0.05]")
     mass: float = Field(gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]")
     material: str = Field("beebread", description="name of a [materials] entry")
+    rolls: bool = Field(
+        True, description="true: a disc that turns (I = m r²/2); false: a sliding point (I = ∞)"
+    )
+    placement: Placement | None = Field(
+        None, description="where the granules start (needed by perga run, not by paper-check)"
+    )
 
 
 class Material(Strict):
@@ -146,7 +202,86 @@ class PaperStudy(Strict):
     )
 
 
-MaterialName = Annotated[str, Field(min_length=1)]
+class Chamber(Strict):
+    """[chamber]: the round wall around the rotor."""
+
+    radius: float = Field(gt=0, le=5, description="inner radius of the wall, m, in (0, 5]")
+    wall_thickness: float = Field(
+        0.01, gt=0, le=1, description="wall thickness, m, in (0, 1]; thick walls stop tunnelling"
+    )
+    material: str = Field("steel", description="name of a [materials] entry")
+
+
+class FloorFriction(Strict):
+    """[effects.floor_friction]: Coulomb friction of the floor under a horizontal rotor."""
+
+    floor: Literal["corotating", "stationary"] = Field(
+        "stationary", description="'corotating' (the rotor disc) or 'stationary' (chamber floor)"
+    )
+    friction: float = Field(ge=0, le=2, description="floor friction coefficient, in [0, 2]")
+
+
+class AirDrag(Strict):
+    """[effects.air_drag]: quadratic drag F = ½ ρ C_d A v² on each granule."""
+
+    air_density: float = Field(1.204, gt=0, le=10, description="air density, kg/m³, in (0, 10]")
+    drag_coefficient: float = Field(0.47, gt=0, le=5, description="C_d, in (0, 5]")
+
+
+class NoParameters(Strict):
+    """An effect that takes no parameters: an empty table switches it on."""
+
+
+class Effects(Strict):
+    """[effects.NAME]: the effects this scene calls for. An effect not listed costs nothing."""
+
+    floor_friction: FloorFriction | None = None
+    gravity_in_plane: NoParameters | None = Field(
+        None, description="gravity in the plane of a vertical rotor"
+    )
+    granule_collisions: NoParameters | None = Field(
+        None, description="granules collide with each other"
+    )
+    hinge_friction: NoParameters | None = Field(
+        None, description="apply hammers.hinge_friction at the hinges"
+    )
+    air_drag: AirDrag | None = None
+    rotor_inertia: NoParameters | None = Field(
+        None, description="the rotor has rotor.inertia and a drive limited to rotor.torque_limit"
+    )
+
+    @property
+    def enabled(self) -> list[str]:
+        """Names of the effects listed in the case."""
+        return [name for name in type(self).model_fields if getattr(self, name) is not None]
+
+
+class Solver(Strict):
+    """[solver]: time stepping."""
+
+    dt: float | Literal["auto"] = Field(
+        "auto", description="time step, s, in (0, 0.01], or 'auto' (from contact and tunnelling)"
+    )
+    substeps: int = Field(1, ge=1, le=1000, description="substeps per recorded step, in [1, 1000]")
+    iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
+    duration: float = Field(0.1, gt=0, le=3600, description="simulated time, s, in (0, 3600]")
+    seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
+
+    @model_validator(mode="after")
+    def _dt_range(self) -> Solver:
+        if self.dt != "auto" and not 0 < self.dt <= 0.01:
+            raise ValueError(f"solver.dt must be in (0, 0.01] s or 'auto' (got {self.dt})")
+        return self
+
+
+class Output(Strict):
+    """[output]: what to record and how often."""
+
+    directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
+    every: float = Field(1e-3, gt=0, description="recording interval in simulated time, s, > 0")
+    record: tuple[Literal["granules", "hammers", "impacts", "energy", "vtk"], ...] = Field(
+        ("granules", "hammers", "impacts", "energy"), description="tables to write"
+    )
 
 
 class Case(Strict):
@@ -157,23 +292,14 @@ class Case(Strict):
     rotor: Rotor
     hammers: Hammers
     granules: Granules
-    materials: dict[MaterialName, Material]
+    materials: dict[str, Material] = Field(description="materials by name: [materials.NAME]")
     contacts: list[ContactPair] = Field(min_length=1)
+    chamber: Chamber | None = Field(None, description="the wall (needed by perga run)")
+    effects: Effects = Field(default_factory=Effects)
+    solver: Solver = Field(default_factory=Solver)
+    output: Output = Field(default_factory=Output)
     gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")
     paper: PaperStudy | None = Field(None, description="inputs of perga paper-check")
-
-    @model_validator(mode="after")
-    def _names_resolve(self) -> Case:
-        names = set(self.materials)
-        used = [("hammers.material", self.hammers.material)]
-        used.append(("granules.material", self.granules.material))
-        used += [(f"contacts[{i}].pair", n) for i, c in enumerate(self.contacts) for n in c.pair]
-        missing = [f"{key} = {name!r}" for key, name in used if name not in names]
-        if missing:
-            raise ValueError(
-                f"unknown material {', '.join(missing)}; defined: {', '.join(sorted(names))}"
-            )
-        return self
 
     def contact(self, a: str, b: str) -> ContactPair:
         """The [[contacts]] entry of materials a and b (KeyError if there is none)."""
