@@ -1,0 +1,221 @@
+"""Stepping a :class:`~perga.engine.scene.Scene`, recording impacts, reading state in SI.
+
+Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t_{n+1}):
+
+1. The impact recorder's clock is set to t_{n+1} = (n + 1)·dt.
+2. Chipmunk advances every body's position and angle with its *current* velocity (the
+   kinematic rotor turns by ω·dt, so its angle is ω·t exactly up to rounding).
+3. Collision detection at the new positions. New granule-hammer contacts call ``begin``: the
+   recorder stores the pre-impact normal relative velocity. Every contact calls ``pre_solve``,
+   which sets the material pair's exact restitution and friction.
+4. Contacts and joints are pre-stepped (restitution target = e × current approach speed),
+   gravity is added to the velocities, the impulse solver runs ``iterations`` times.
+5. ``post_solve``: on a pair's first step of contact the recorder stores the post-impact
+   normal relative velocity and the normal impulse.
+6. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
+
+Because positions move before velocities are updated (step 2 before 4), the state after a
+step is (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler,
+first order; in leapfrog terms the velocities are half a step ahead of the positions.
+Accessors return the values as Chipmunk holds them, converted to SI.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+from numpy.typing import NDArray
+
+from perga.engine import units as u
+from perga.engine.scene import Scene
+from perga.engine.spec import HammerSpec
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Impact:
+    """One granule-hammer impact (the first step of a contact), SI units.
+
+    time: s (end of the step in which the contact began); granule, hammer: indices in the
+    spec; normal_velocity_before/after: the granule's velocity relative to the hammer's
+    material point at the contact, along the hammer's outward normal (m/s; < 0 approaching,
+    > 0 separating); normal_impulse: impulse on the granule along that normal, N·s (>= 0);
+    point: contact point, m; normal: the hammer's outward unit normal.
+    """
+
+    time: float
+    granule: int
+    hammer: int
+    normal_velocity_before: float
+    normal_velocity_after: float
+    normal_impulse: float
+    point: tuple[float, float]
+    normal: tuple[float, float]
+
+
+def _contact(arbiter: pymunk.Arbiter) -> tuple[float, pymunk.Vec2d, pymunk.Vec2d]:
+    """Normal relative velocity (internal units), approach convention of :class:`Impact`, the
+    contact point and the hammer's outward normal. Shapes are ordered (granule, hammer)."""
+    granule_shape, hammer_shape = arbiter.shapes
+    outward = -arbiter.normal  # arbiter.normal points from the granule to the hammer
+    points = arbiter.contact_point_set.points
+    p = (points[0].point_a + points[0].point_b) * 0.5
+    v_g = granule_shape.body.velocity_at_world_point(p)
+    v_h = hammer_shape.body.velocity_at_world_point(p)
+    return (v_g - v_h).dot(outward), p, outward
+
+
+class ImpactRecorder:
+    """Records the first step of every granule-hammer contact as an :class:`Impact`."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.impacts: list[Impact] = []
+        self.time = 0.0
+        self._owner = scene.shape_owner
+        self._pending: dict[tuple[int, int], float] = {}
+        scene.on_granule_hammer(
+            begin=self._begin, post_solve=self._post_solve, separate=self._separate
+        )
+
+    def _key(self, arbiter: pymunk.Arbiter) -> tuple[int, int]:
+        granule_shape, hammer_shape = arbiter.shapes
+        return self._owner[granule_shape][1], self._owner[hammer_shape][1]
+
+    def _begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        self._pending[self._key(arbiter)] = _contact(arbiter)[0]
+
+    def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        key = self._key(arbiter)
+        before = self._pending.pop(key, None)
+        if before is None:
+            return
+        after, point, outward = _contact(arbiter)
+        # measured: total_impulse is the impulse on the first shape's body (the granule)
+        impulse = arbiter.total_impulse.dot(outward)
+        self.impacts.append(
+            Impact(
+                time=self.time,
+                granule=key[0],
+                hammer=key[1],
+                normal_velocity_before=u.to_si(before, u.VELOCITY),
+                normal_velocity_after=u.to_si(after, u.VELOCITY),
+                normal_impulse=u.to_si(impulse, u.IMPULSE),
+                point=u.vec_to_si(tuple(point), u.LENGTH),
+                normal=(outward.x, outward.y),
+            )
+        )
+
+    def _separate(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        self._pending.pop(self._key(arbiter), None)
+
+
+class Simulation:
+    """Steps a scene at the spec's fixed dt (see the module docstring for the step order)."""
+
+    def __init__(self, scene: Scene, *, record_impacts: bool = True) -> None:
+        self.scene = scene
+        self.dt = scene.spec.dt
+        self.steps = 0
+        self._dt_internal = u.to_internal(self.dt, u.TIME)
+        self.recorder = ImpactRecorder(scene) if record_impacts else None
+
+    @property
+    def time(self) -> float:
+        """Simulated time, s."""
+        return self.steps * self.dt
+
+    @property
+    def impacts(self) -> list[Impact]:
+        """Impacts recorded so far (empty if recording is off)."""
+        return [] if self.recorder is None else self.recorder.impacts
+
+    def step(self) -> None:
+        """Advance by one time step dt."""
+        if self.recorder is not None:
+            self.recorder.time = (self.steps + 1) * self.dt
+        self.scene.space.step(self._dt_internal)
+        self.steps += 1
+
+    def run(self, duration: float) -> int:
+        """Advance by ``duration`` (s), rounded to a whole number of steps; returns the count."""
+        if not (math.isfinite(duration) and duration >= 0):
+            raise ValueError(f"duration must be finite and >= 0 s (got {duration})")
+        n = round(duration / self.dt)
+        for _ in range(n):
+            self.step()
+        return n
+
+    # --- state in SI -----------------------------------------------------------------------
+
+    def granule_positions(self) -> FloatArray:
+        """Granule centres, (n, 2) array, m."""
+        return (
+            np.array([tuple(b.position) for b in self.scene.granule_bodies], dtype=float).reshape(
+                -1, 2
+            )
+            * u.LENGTH
+        )
+
+    def granule_velocities(self) -> FloatArray:
+        """Granule centre velocities, (n, 2) array, m/s."""
+        return (
+            np.array([tuple(b.velocity) for b in self.scene.granule_bodies], dtype=float).reshape(
+                -1, 2
+            )
+            * u.VELOCITY
+        )
+
+    def granule_angular_velocities(self) -> FloatArray:
+        """Granule angular velocities, (n,) array, rad/s."""
+        return (
+            np.array([b.angular_velocity for b in self.scene.granule_bodies], dtype=float)
+            * u.ANGULAR_VELOCITY
+        )
+
+    def rotor_angle(self) -> float:
+        """Rotor angle, rad (ω·t at constant ω)."""
+        return float(self.scene.rotor.angle)
+
+    def hammer_swing_angles(self) -> FloatArray:
+        """α of each hammer: its axis angle relative to the radial line through the hinge on
+        the turning rotor, rad (constant for welded hammers)."""
+        rotor_angle = self.scene.rotor.angle
+        out = []
+        for spec, body in zip(self.scene.spec.hammers, self.scene.hammer_bodies, strict=True):
+            if body is self.scene.rotor:
+                out.append(spec.swing_angle)
+            else:
+                out.append(body.angle - rotor_angle - spec.angle_on_rotor)
+        return np.array(out, dtype=float)
+
+    def hammer_velocities(self) -> FloatArray:
+        """Centre-of-mass velocity of each hammer, (n, 2) array, m/s (welded: the rotor's
+        velocity at the hammer's centre of mass)."""
+        out = []
+        for spec, body, shape in zip(
+            self.scene.spec.hammers,
+            self.scene.hammer_bodies,
+            self.scene.hammer_shapes,
+            strict=True,
+        ):
+            if body is self.scene.rotor:
+                out.append(tuple(body.velocity_at_world_point(_welded_com(spec, shape))))
+            else:
+                out.append(tuple(body.velocity))
+        return np.array(out, dtype=float).reshape(-1, 2) * u.VELOCITY
+
+
+def _welded_com(spec: HammerSpec, shape: pymunk.Poly) -> pymunk.Vec2d:
+    """World position (internal units) of a welded hammer's centre of mass."""
+    cx, cy = u.vec_to_internal(spec.centre_of_mass, u.LENGTH)
+    a = spec.angle_on_rotor + spec.swing_angle
+    hx = u.to_internal(spec.hinge_radius, u.LENGTH) * math.cos(spec.angle_on_rotor)
+    hy = u.to_internal(spec.hinge_radius, u.LENGTH) * math.sin(spec.angle_on_rotor)
+    local = pymunk.Vec2d(
+        hx + math.cos(a) * cx - math.sin(a) * cy, hy + math.sin(a) * cx + math.cos(a) * cy
+    )
+    return shape.body.local_to_world(local)

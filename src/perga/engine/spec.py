@@ -1,0 +1,254 @@
+"""Engine-level scene description: frozen dataclasses in SI units, independent of the case-file
+schema (``perga.case``), which is mapped onto these later.
+
+Frames: the rotor axis is the origin of the fixed plane frame, ω > 0 turns counter-clockwise.
+A hammer's outline is given in its own frame: hinge at the origin, hammer axis along +x. The
+hinge sits at ``hinge_radius`` on the rotor at the polar angle ``angle_on_rotor``; the hammer
+axis makes ``swing_angle`` (α, rad, counter-clockwise) with the radial line through the hinge.
+
+Units: m, s, kg, rad; velocities m/s; moments of inertia kg·m²; gravity m/s².
+Invalid input raises ``ValueError`` listing every problem found.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+Vec2 = tuple[float, float]
+Mount = Literal["hinged", "welded", "free"]
+
+
+def _raise(owner: str, problems: list[str]) -> None:
+    if problems:
+        raise ValueError(f"{owner}: " + "; ".join(problems))
+
+
+def _positive(problems: list[str], name: str, value: float, unit: str) -> None:
+    if not (math.isfinite(value) and value > 0):
+        problems.append(f"{name} must be finite and > 0 {unit} (got {value})")
+
+
+def _finite_vec(problems: list[str], name: str, value: Vec2) -> None:
+    if len(value) != 2 or not all(math.isfinite(c) for c in value):
+        problems.append(f"{name} must be two finite numbers (got {value!r})")
+
+
+def _is_convex(outline: tuple[Vec2, ...]) -> bool:
+    """True for a simple convex polygon (either winding; collinear vertices allowed)."""
+    n = len(outline)
+    signs = set()
+    turning = 0.0
+    for i in range(n):
+        (x0, y0), (x1, y1), (x2, y2) = outline[i], outline[(i + 1) % n], outline[(i + 2) % n]
+        cross = (x1 - x0) * (y2 - y1) - (y1 - y0) * (x2 - x1)
+        if cross != 0.0:
+            signs.add(cross > 0)
+        turning += math.atan2(cross, (x1 - x0) * (x2 - x1) + (y1 - y0) * (y2 - y1))
+    # one turning direction and a total turn of exactly ±2π (excludes star polygons)
+    return len(signs) == 1 and abs(abs(turning) - 2 * math.pi) < 1e-6
+
+
+@dataclass(frozen=True)
+class RotorSpec:
+    """A rotor turning at constant angular velocity about the origin.
+
+    omega: angular velocity, rad/s (>= 0; 0 gives a fixed machine, e.g. a wall test);
+    radius: rotor disc radius, m (> 0; geometric, used for output and checks).
+    """
+
+    omega: float
+    radius: float
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        if not (math.isfinite(self.omega) and self.omega >= 0):
+            problems.append(f"omega must be finite and >= 0 rad/s (got {self.omega})")
+        _positive(problems, "radius", self.radius, "m")
+        _raise("rotor", problems)
+
+
+@dataclass(frozen=True)
+class HammerSpec:
+    """A hammer: a convex polygon mounted on the rotor.
+
+    outline: convex polygon vertices (m) in the hammer frame (hinge at origin, axis +x);
+    mass: kg; moment_about_hinge: I_A, kg·m² (> mass·|centre_of_mass|²);
+    centre_of_mass: (m) in the hammer frame; hinge_radius: distance of the hinge from the
+    rotor axis, m (>= 0); angle_on_rotor: polar angle of the hinge, rad;
+    mount: 'hinged' (free to swing about the hinge), 'welded' (rigidly part of the rotor), or
+    'free' (no attachment; for validation scenes: the hammer then moves with ``velocity``);
+    material: name looked up in the scene's contact table;
+    swing_angle: initial α, rad (hinged/free only; the hammer starts co-rotating with the rotor);
+    velocity: initial centre-of-mass velocity, m/s ('free' only);
+    angular_velocity: initial angular velocity, rad/s ('free' only).
+    """
+
+    outline: tuple[Vec2, ...]
+    mass: float
+    moment_about_hinge: float
+    centre_of_mass: Vec2
+    hinge_radius: float
+    angle_on_rotor: float
+    mount: Mount
+    material: str
+    swing_angle: float = 0.0
+    velocity: Vec2 = (0.0, 0.0)
+    angular_velocity: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "outline", tuple(tuple(map(float, v)) for v in self.outline))
+        problems: list[str] = []
+        if len(self.outline) < 3:
+            problems.append(f"outline needs >= 3 vertices (got {len(self.outline)})")
+        for i, vertex in enumerate(self.outline):
+            _finite_vec(problems, f"outline[{i}]", vertex)  # type: ignore[arg-type]
+        if not problems and not _is_convex(self.outline):
+            problems.append(
+                "outline must be a convex polygon (Chipmunk silently replaces a concave one "
+                "by its hull): decompose it into convex parts"
+            )
+        _positive(problems, "mass", self.mass, "kg")
+        _finite_vec(problems, "centre_of_mass", self.centre_of_mass)
+        if not problems:
+            arm2 = self.centre_of_mass[0] ** 2 + self.centre_of_mass[1] ** 2
+            if not (
+                math.isfinite(self.moment_about_hinge)
+                and self.moment_about_hinge > self.mass * arm2
+            ):
+                problems.append(
+                    "moment_about_hinge must exceed mass·|centre_of_mass|² = "
+                    f"{self.mass * arm2} kg·m² (got {self.moment_about_hinge})"
+                )
+        if not (math.isfinite(self.hinge_radius) and self.hinge_radius >= 0):
+            problems.append(f"hinge_radius must be finite and >= 0 m (got {self.hinge_radius})")
+        if self.mount not in ("hinged", "welded", "free"):
+            problems.append(f"mount must be 'hinged', 'welded' or 'free' (got {self.mount!r})")
+        if self.mount != "free" and (self.velocity != (0.0, 0.0) or self.angular_velocity != 0.0):
+            problems.append("velocity and angular_velocity are only for mount 'free'")
+        if not self.material:
+            problems.append("material must be a non-empty name")
+        _raise("hammer", problems)
+
+    @property
+    def moment_about_centre(self) -> float:
+        """I_C = I_A − M·|c|², kg·m² (parallel-axis theorem)."""
+        cx, cy = self.centre_of_mass
+        return self.moment_about_hinge - self.mass * (cx * cx + cy * cy)
+
+
+@dataclass(frozen=True)
+class GranuleSpec:
+    """A disc granule.
+
+    position (m), velocity (m/s) in the fixed frame; radius (m), mass (kg); material;
+    rolls: True gives a disc's moment m r²/2 (it can roll); False gives moment = inf, a sliding
+    point that never changes its angular velocity; angular_velocity: initial, rad/s (a sliding
+    granule on a rotor face should start with the rotor's ω so that its surface does not slip
+    against the face, design §5).
+    """
+
+    position: Vec2
+    velocity: Vec2
+    radius: float
+    mass: float
+    material: str
+    rolls: bool = True
+    angular_velocity: float = 0.0
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        _finite_vec(problems, "position", self.position)
+        _finite_vec(problems, "velocity", self.velocity)
+        _positive(problems, "radius", self.radius, "m")
+        _positive(problems, "mass", self.mass, "kg")
+        if not math.isfinite(self.angular_velocity):
+            problems.append(f"angular_velocity must be finite (got {self.angular_velocity})")
+        if not self.material:
+            problems.append("material must be a non-empty name")
+        _raise("granule", problems)
+
+    @property
+    def moment(self) -> float:
+        """Moment of inertia about the centre, kg·m²: m r²/2 (rolls) or inf (sliding point)."""
+        return 0.5 * self.mass * self.radius**2 if self.rolls else math.inf
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """Contact parameters of one unordered material pair: Newton restitution e in [0, 1] and
+    Coulomb friction f >= 0, used exactly (not as a product of per-material values)."""
+
+    material_a: str
+    material_b: str
+    restitution: float
+    friction: float
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        if not 0.0 <= self.restitution <= 1.0:
+            problems.append(f"restitution must be in [0, 1] (got {self.restitution})")
+        if not (math.isfinite(self.friction) and self.friction >= 0):
+            problems.append(f"friction must be finite and >= 0 (got {self.friction})")
+        _raise(f"contact {self.material_a}-{self.material_b}", problems)
+
+    @property
+    def key(self) -> frozenset[str]:
+        """The unordered pair."""
+        return frozenset((self.material_a, self.material_b))
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """Everything the engine builds a scene from.
+
+    dt: time step, s (> 0); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
+    gravity, m/s² (zero for a horizontal rotor); granule_collisions: whether granules collide
+    with each other. Every material pair that can touch must be in ``contacts`` exactly once.
+    Hammers never collide with each other or with the rotor.
+    """
+
+    rotor: RotorSpec
+    hammers: tuple[HammerSpec, ...]
+    granules: tuple[GranuleSpec, ...]
+    contacts: tuple[ContactSpec, ...]
+    dt: float
+    iterations: int = 10
+    gravity: Vec2 = (0.0, 0.0)
+    granule_collisions: bool = False
+    _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        for name in ("hammers", "granules", "contacts"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        problems: list[str] = []
+        _positive(problems, "dt", self.dt, "s")
+        if not (isinstance(self.iterations, int) and self.iterations >= 1):
+            problems.append(f"iterations must be an integer >= 1 (got {self.iterations!r})")
+        _finite_vec(problems, "gravity", self.gravity)
+        table: dict[frozenset[str], ContactSpec] = {}
+        for contact in self.contacts:
+            if contact.key in table:
+                problems.append(f"contact pair {sorted(contact.key)} is given more than once")
+            table[contact.key] = contact
+        for pair in sorted(self.touching_pairs(), key=sorted):
+            if pair not in table:
+                problems.append(f"no contact parameters for materials {sorted(pair)}")
+        for pair in sorted(set(table) - self.touching_pairs(), key=sorted):
+            problems.append(f"contact pair {sorted(pair)} is unused by this scene")
+        _raise("scene", problems)
+        object.__setattr__(self, "_table", table)
+
+    def touching_pairs(self) -> set[frozenset[str]]:
+        """Material pairs that can come into contact in this scene."""
+        granule_materials = {g.material for g in self.granules}
+        hammer_materials = {h.material for h in self.hammers}
+        pairs = {frozenset((g, h)) for g in granule_materials for h in hammer_materials}
+        if self.granule_collisions:
+            pairs |= {frozenset((a, b)) for a in granule_materials for b in granule_materials}
+        return pairs
+
+    def contact(self, material_a: str, material_b: str) -> ContactSpec:
+        """The contact parameters of a material pair (order does not matter)."""
+        return self._table[frozenset((material_a, material_b))]

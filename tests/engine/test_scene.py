@@ -1,0 +1,107 @@
+"""Scene construction: validation, filters, only-what-is-asked-for, unit round trips."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from perga.engine import (
+    ContactSpec,
+    GranuleSpec,
+    HammerSpec,
+    RotorSpec,
+    SceneSpec,
+    Simulation,
+    build_scene,
+)
+from tests.engine.helpers import plate, rectangle
+
+
+def _head_on(granule_collisions: bool, contacts: tuple[ContactSpec, ...]) -> Simulation:
+    r = 0.002
+    granules = tuple(
+        GranuleSpec(position=(x, 0.0), velocity=(v, 0.0), radius=r, mass=50e-6, material="bb")
+        for x, v in ((-0.005, 5.0), (0.005, -5.0))
+    )
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=0.0, radius=0.2),
+        hammers=(),
+        granules=granules,
+        contacts=contacts,
+        dt=1e-5,
+        granule_collisions=granule_collisions,
+    )
+    sim = Simulation(build_scene(spec))
+    sim.run(2e-3)
+    return sim
+
+
+def test_granule_collisions_off_leaves_no_handler_and_granules_pass() -> None:
+    sim = _head_on(False, ())
+    assert sim.scene.pairs == []
+    # exact: no contact ever touches them, velocities are untouched
+    assert sim.granule_velocities()[:, 0].tolist() == [5.0, -5.0]
+
+
+def test_granule_collisions_on_bounce_with_pair_restitution() -> None:
+    sim = _head_on(True, (ContactSpec("bb", "bb", restitution=0.5, friction=0.2),))
+    # equal masses, e = 0.5: each leaves at e·5 m/s backwards (exact to rounding)
+    assert sim.granule_velocities()[:, 0] == pytest.approx([-2.5, 2.5], rel=1e-12)
+
+
+def test_missing_and_unused_pairs_are_errors() -> None:
+    granule = GranuleSpec(
+        position=(0.1, 0.0), velocity=(0, 0), radius=0.002, mass=1e-5, material="bb"
+    )
+    hammer = plate(0, 0.1, -0.01, 0.01, 0.05, hinge_radius=0.1, angle_on_rotor=0.0,
+                   mount="hinged", material="steel")  # fmt: skip
+    with pytest.raises(ValueError, match=r"no contact parameters for materials \['bb', 'steel'\]"):
+        SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (granule,), (), dt=1e-5)
+    with pytest.raises(ValueError, match="unused"):
+        SceneSpec(
+            RotorSpec(10.0, 0.2), (hammer,), (granule,),
+            (ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "bb", 0.5, 0.3)), dt=1e-5,
+        )  # fmt: skip
+
+
+def test_invalid_hammer_lists_every_problem() -> None:
+    with pytest.raises(ValueError) as info:
+        HammerSpec(
+            outline=rectangle(0, 0.1, -0.01, 0.01), mass=-1.0, moment_about_hinge=1e-4,
+            centre_of_mass=(0.05, 0.0), hinge_radius=-0.1, angle_on_rotor=0.0,
+            mount="glued", material="steel",  # type: ignore[arg-type]
+        )  # fmt: skip
+    message = str(info.value)
+    for part in ("mass", "hinge_radius", "mount"):
+        assert part in message
+
+
+def test_hinged_hammer_pose_and_mass_properties() -> None:
+    """The body's mass, moment about its centre of mass (I_A − M|c|²), hinge position and
+    initial co-rotation come out in SI as given (exact to rounding)."""
+    omega, R, phi = 50.0, 0.1, 0.7
+    hammer = plate(-0.01, 0.09, -0.01, 0.01, 0.078, hinge_radius=R, angle_on_rotor=phi,
+                   mount="hinged", material="steel", swing_angle=0.1)  # fmt: skip
+    spec = SceneSpec(RotorSpec(omega, 0.2), (hammer,), (), (), dt=1e-5)
+    scene = build_scene(spec)
+    body = scene.hammer_bodies[0]
+    assert body.mass * 1e-3 == pytest.approx(0.078, rel=1e-12)
+    assert body.moment * 1e-9 == pytest.approx(hammer.moment_about_centre, rel=1e-12)
+    assert tuple(body.position * 1e-3) == pytest.approx((R * math.cos(phi), R * math.sin(phi)))
+    assert body.angular_velocity * 1e3 == pytest.approx(omega, rel=1e-12)
+    sim = Simulation(scene)
+    assert sim.hammer_swing_angles()[0] == pytest.approx(0.1, rel=1e-12)
+    # the pivot joint is in the space, and there are no collision handlers without granules
+    assert len(scene.joints) == 1
+    assert scene.pairs == []
+
+
+def test_concave_outline_is_rejected() -> None:
+    """Chipmunk would silently use the hull; the spec refuses instead."""
+    notch = ((0.0, -0.01), (0.1, -0.01), (0.1, 0.01), (0.05, 0.0), (0.0, 0.01))
+    with pytest.raises(ValueError, match="convex"):
+        HammerSpec(
+            outline=notch, mass=0.05, moment_about_hinge=1e-3, centre_of_mass=(0.05, 0.0),
+            hinge_radius=0.1, angle_on_rotor=0.0, mount="hinged", material="steel",
+        )  # fmt: skip
