@@ -84,8 +84,8 @@ def test_efficiency_rows_are_the_two_body_law():
             expected = (1 + p.e) ** 2 * p.m * M / (M + p.m) ** 2
             got = getattr(ROWS[key], which).numbers["efficiency"]
             assert got == pytest.approx(expected, rel=1e-12)
-    # read as per cent, no granule mass fits: the ratio η(5 g)/η(100 g) is 7.5 in the paper
-    # and (100/5)·((5+m)/(100+m))⁻²... ≥ 7.5 only for m ≳ 3 g, where η(5 g) ≈ 0.7, not 0.007
+    # read as per cent, no granule mass fits: the paper's ratio η(5 g)/η(100 g) is 7.5, the law's
+    # is (5/100)·((100 + m)/(5 + m))², which falls to 7.5 only at m ≈ 3.4 g, where η(5 g) ≈ 0.7
     m_best, rms = fit_granule_mass(FITTED.paper, 0.7)
     assert rms > math.log(1.5)
     assert two_body_efficiency(m_best, 0.005, 0.7) > 0.01
