@@ -6,7 +6,16 @@ import math
 
 import numpy as np
 
-from perga.engine import HammerSpec, Simulation
+from perga.engine import (
+    ContactSpec,
+    EffectsSpec,
+    GranuleSpec,
+    HammerSpec,
+    RotorSpec,
+    SceneSpec,
+    Simulation,
+    build_scene,
+)
 
 
 def rectangle(x0: float, x1: float, y0: float, y1: float) -> tuple[tuple[float, float], ...]:
@@ -38,3 +47,61 @@ def rotating_frame(sim: Simulation, omega: float) -> tuple[float, float, float]:
     v = sim.granule_velocities()[0]
     v_rel = v - omega * np.array([-p[1], p[0]])
     return float(p @ ex), float(v_rel @ ex), float(p @ ey)
+
+
+def blade_exit(
+    omega: float,
+    x0: float,
+    v0: float,
+    tip: float,
+    dt: float,
+    *,
+    face_friction: float = 0.0,
+    rolls: bool = False,
+    spin: float = 0.0,
+    effects: EffectsSpec | None = None,
+    radius: float = 0.002,
+    thickness: float = 0.004,
+) -> tuple[float, float, float]:
+    """A granule on the leading face of a welded radial blade (ω constant) starting at x0 with
+    outward speed v0 and angular velocity ``spin`` (rad/s) relative to the blade. Returns the
+    exit time (s) and relative exit speed (m/s), interpolated linearly between the two steps
+    around x = tip, and the largest |offset| of its centre from the blade's centre line (m).
+
+    The leading face (y = −radius) is offset by the granule radius so that the granule's centre
+    line passes through the axis; Coriolis presses the granule onto it. e = 0: a sustained
+    contact re-applies e to each step's small approach speed."""
+    blade = plate(
+        0.0, tip, -radius - thickness, -radius, 0.1,
+        hinge_radius=0.0, angle_on_rotor=0.0, mount="welded", material="steel",
+    )  # fmt: skip
+    granule = GranuleSpec(
+        position=(x0, 0.0),
+        velocity=(v0, omega * x0),
+        radius=radius,
+        mass=50e-6,
+        material="beebread",
+        rolls=rolls,
+        angular_velocity=omega + spin,
+    )
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=omega, radius=0.2),
+        hammers=(blade,),
+        granules=(granule,),
+        contacts=(ContactSpec("beebread", "steel", restitution=0.0, friction=face_friction),),
+        dt=dt,
+        effects=effects or EffectsSpec(),
+    )
+    sim = Simulation(build_scene(spec), record_impacts=False, track_energy=False)
+    previous = (sim.time, *rotating_frame(sim, omega))
+    offset = 0.0
+    while True:
+        sim.step()
+        current = (sim.time, *rotating_frame(sim, omega))
+        if current[1] >= tip:
+            s = (tip - previous[1]) / (current[1] - previous[1])
+            t = previous[0] + s * (current[0] - previous[0])
+            v = previous[2] + s * (current[2] - previous[2])
+            return t, v, offset
+        offset = max(offset, abs(current[3]))
+        previous = current

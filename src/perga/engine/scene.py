@@ -17,14 +17,22 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
     validation scenes such as a free two-body impact).
 
 * Granules: dynamic bodies with one ``Circle`` each; moment m r²/2 or ``inf`` (sliding point).
+* Chamber (optional): ``segments`` convex quadrilaterals on the space's static body, each
+  ``wall_thickness`` thick, whose inner faces are tangent to the circle of the inner radius
+  (the inner outline is the circumscribed polygon: at most R(1/cos(π/N) − 1) outside the
+  circle, 8e-5 m for R = 0.15 m, N = 96). They share the hammers' filter group.
+* Effects: :mod:`perga.engine.effects` builds exactly the effects the spec lists, after
+  everything else (the drive turns the rotor into a dynamic body).
 * Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Every shape gets
   elasticity = friction = 1 and each material-pair handler sets ``arbiter.restitution`` and
   ``arbiter.friction`` in ``pre_solve`` to the pair's exact values (Chipmunk resets them to
   the product every step, so it must be ``pre_solve``, not ``begin``). Collision types are
-  one per (kind, material); handlers are registered only for pairs that can touch.
-* Filters: all hammers share one non-zero ``ShapeFilter`` group (hammers never collide with
-  each other); when ``granule_collisions`` is False all granules share another group, which
-  removes granule pairs before the narrow phase.
+  one per (kind, material); handlers are registered only for pairs that can touch. Each
+  handler phase runs a list of listeners (:meth:`Scene.listen`), so that the pair setter, the
+  impact recorder and the energy meter can share one handler.
+* Filters: all hammers and the chamber share one non-zero ``ShapeFilter`` group (hammers never
+  collide with each other or with the wall); when ``granule_collisions`` is False all granules
+  share another group, which removes granule pairs before the narrow phase.
 """
 
 from __future__ import annotations
@@ -37,9 +45,12 @@ from typing import Any, Literal
 import pymunk
 
 from perga.engine import units as u
-from perga.engine.spec import GranuleSpec, HammerSpec, SceneSpec
+from perga.engine.effects import Effect, build_effects
+from perga.engine.spec import ChamberSpec, GranuleSpec, HammerSpec, SceneSpec
 
-Kind = Literal["granule", "hammer"]
+Kind = Literal["granule", "hammer", "wall"]
+Phase = Literal["begin", "pre_solve", "post_solve", "separate"]
+Callback = Callable[[pymunk.Arbiter, pymunk.Space, Any], None]
 
 HAMMER_GROUP = 1
 GRANULE_GROUP = 2
@@ -50,9 +61,10 @@ class Scene:
     """The pymunk objects of one scene, plus the bookkeeping recorders need.
 
     ``hammer_bodies[i]`` is the rotor body for a welded hammer. ``shape_owner`` maps every
-    shape to (kind, index into the spec's list). ``collision_types`` maps (kind, material) to
-    the Chipmunk collision type; ``pairs`` lists the (type_a, type_b) handlers installed,
-    type_a being a granule type.
+    granule and hammer shape to (kind, index into the spec's list); ``wall_shapes`` are the
+    chamber's. ``collision_types`` maps (kind, material) to the Chipmunk collision type;
+    ``pairs`` lists the (type_a, type_b) handlers installed, type_a being a granule type.
+    ``effects`` are the effects built (:mod:`perga.engine.effects`), in build order.
     """
 
     spec: SceneSpec
@@ -65,41 +77,62 @@ class Scene:
     granule_shapes: list[pymunk.Circle]
     shape_owner: dict[pymunk.Shape, tuple[Kind, int]]
     collision_types: dict[tuple[Kind, str], int]
+    wall_shapes: list[pymunk.Poly] = field(default_factory=list)
     pairs: list[tuple[int, int]] = field(default_factory=list)
+    effects: list[Effect] = field(default_factory=list)
+    _listeners: dict[tuple[int, int, Phase], list[Callback]] = field(default_factory=dict)
+
+    def listen(
+        self, phase: Phase, callback: Callback, kinds: tuple[Kind, Kind] | None = None
+    ) -> None:
+        """Run ``callback(arbiter, space, None)`` in ``phase`` of every installed pair handler
+        (shapes ordered granule first), or only of pairs of ``kinds`` (granule kind first)."""
+        for kind_a, kind_b, type_a, type_b in self._typed_pairs():
+            if kinds is None or (kind_a, kind_b) == kinds:
+                self._listen_pair(type_a, type_b, phase, callback)
+
+    def _listen_pair(self, type_a: int, type_b: int, phase: Phase, callback: Callback) -> None:
+        key = (type_a, type_b, phase)
+        if key not in self._listeners:
+            self._listeners[key] = []
+            self.space.on_collision(type_a, type_b, data=self._listeners[key], **{phase: _dispatch})
+        self._listeners[key].append(callback)
 
     def on_granule_hammer(
         self,
-        begin: Callable[[pymunk.Arbiter, pymunk.Space, Any], None] | None = None,
-        post_solve: Callable[[pymunk.Arbiter, pymunk.Space, Any], None] | None = None,
-        separate: Callable[[pymunk.Arbiter, pymunk.Space, Any], None] | None = None,
+        begin: Callback | None = None,
+        post_solve: Callback | None = None,
+        separate: Callback | None = None,
     ) -> None:
         """Add callbacks to every granule-hammer handler (shapes ordered granule, hammer)."""
-        for kind_a, kind_b, type_a, type_b in self._typed_pairs():
-            if (kind_a, kind_b) == ("granule", "hammer"):
-                self.space.on_collision(
-                    type_a, type_b, begin=begin, post_solve=post_solve, separate=separate
-                )
+        for phase, callback in (
+            ("begin", begin),
+            ("post_solve", post_solve),
+            ("separate", separate),
+        ):
+            if callback is not None:
+                self.listen(phase, callback, ("granule", "hammer"))
 
     def _typed_pairs(self) -> list[tuple[Kind, Kind, int, int]]:
         kind_of = {t: k for (k, _), t in self.collision_types.items()}
         return [(kind_of[a], kind_of[b], a, b) for a, b in self.pairs]
 
 
+def _dispatch(arbiter: pymunk.Arbiter, space: pymunk.Space, callbacks: list[Callback]) -> None:
+    for callback in callbacks:
+        callback(arbiter, space, None)
+
+
+def _pair_setter(restitution: float, friction: float) -> Callback:
+    def set_pair(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: Any) -> None:
+        arbiter.restitution, arbiter.friction = restitution, friction
+
+    return set_pair
+
+
 def _rotate(x: float, y: float, angle: float) -> tuple[float, float]:
     c, s = math.cos(angle), math.sin(angle)
     return (c * x - s * y, s * x + c * y)
-
-
-def _hinge_position(h: HammerSpec) -> tuple[float, float]:
-    """Hinge position in the rotor frame (= fixed frame at t = 0), m."""
-    return (
-        h.hinge_radius * math.cos(h.angle_on_rotor),
-        h.hinge_radius * math.sin(h.angle_on_rotor),
-    )
-
-
-def _set_pair(arbiter: pymunk.Arbiter, _space: pymunk.Space, data: tuple[float, float]) -> None:
-    arbiter.restitution, arbiter.friction = data
 
 
 def build_scene(spec: SceneSpec) -> Scene:
@@ -120,19 +153,21 @@ def build_scene(spec: SceneSpec) -> Scene:
     def ctype(kind: Kind, material: str) -> int:
         return collision_types.setdefault((kind, material), len(collision_types) + 1)
 
+    def add_shape(shape: pymunk.Shape, kind: Kind, material: str, group: int) -> None:
+        shape.filter = pymunk.ShapeFilter(group=group)
+        shape.elasticity = shape.friction = 1.0
+        shape.collision_type = ctype(kind, material)
+        space.add(shape)
+
     shape_owner: dict[pymunk.Shape, tuple[Kind, int]] = {}
     hammer_bodies: list[pymunk.Body] = []
     hammer_shapes: list[pymunk.Poly] = []
     joints: list[pymunk.Constraint] = []
-    hammer_filter = pymunk.ShapeFilter(group=HAMMER_GROUP)
     for index, h in enumerate(spec.hammers):
         shape, body, joint = _build_hammer(h, rotor, omega)
-        shape.filter = hammer_filter
-        shape.elasticity = shape.friction = 1.0
-        shape.collision_type = ctype("hammer", h.material)
         if body is not rotor:
             space.add(body)
-        space.add(shape)
+        add_shape(shape, "hammer", h.material, HAMMER_GROUP)
         if joint is not None:
             space.add(joint)
             joints.append(joint)
@@ -142,18 +177,20 @@ def build_scene(spec: SceneSpec) -> Scene:
 
     granule_bodies: list[pymunk.Body] = []
     granule_shapes: list[pymunk.Circle] = []
-    granule_filter = (
-        pymunk.ShapeFilter() if spec.granule_collisions else pymunk.ShapeFilter(group=GRANULE_GROUP)
-    )
+    granule_group = 0 if spec.granule_collisions else GRANULE_GROUP
     for index, g in enumerate(spec.granules):
         body, shape = _build_granule(g)
-        shape.filter = granule_filter
-        shape.elasticity = shape.friction = 1.0
-        shape.collision_type = ctype("granule", g.material)
-        space.add(body, shape)
+        space.add(body)
+        add_shape(shape, "granule", g.material, granule_group)
         granule_bodies.append(body)
         granule_shapes.append(shape)
         shape_owner[shape] = ("granule", index)
+
+    wall_shapes: list[pymunk.Poly] = []
+    if spec.chamber is not None:
+        for shape in _build_chamber(spec.chamber, space.static_body):
+            add_shape(shape, "wall", spec.chamber.material, HAMMER_GROUP)
+            wall_shapes.append(shape)
 
     scene = Scene(
         spec=spec,
@@ -166,26 +203,28 @@ def build_scene(spec: SceneSpec) -> Scene:
         granule_shapes=granule_shapes,
         shape_owner=shape_owner,
         collision_types=collision_types,
+        wall_shapes=wall_shapes,
     )
     granule_keys = [k for k in collision_types if k[0] == "granule"]
-    hammer_keys = [k for k in collision_types if k[0] == "hammer"]
-    candidate = [(g, h) for g in granule_keys for h in hammer_keys]
+    other_keys = [k for k in collision_types if k[0] != "granule"]
+    candidate = [(g, h) for g in granule_keys for h in other_keys]
     if spec.granule_collisions:
         candidate += [(a, b) for i, a in enumerate(granule_keys) for b in granule_keys[i:]]
     for key_a, key_b in candidate:
         contact = spec.contact(key_a[1], key_b[1])
         type_a, type_b = collision_types[key_a], collision_types[key_b]
-        space.on_collision(
-            type_a, type_b, pre_solve=_set_pair, data=(contact.restitution, contact.friction)
-        )
         scene.pairs.append((type_a, type_b))
+        scene._listen_pair(
+            type_a, type_b, "pre_solve", _pair_setter(contact.restitution, contact.friction)
+        )
+    scene.effects = build_effects(scene)
     return scene
 
 
 def _build_hammer(
     h: HammerSpec, rotor: pymunk.Body, omega: float
 ) -> tuple[pymunk.Poly, pymunk.Body, pymunk.Constraint | None]:
-    hinge = u.vec_to_internal(_hinge_position(h), u.LENGTH)
+    hinge = u.vec_to_internal(h.hinge_position, u.LENGTH)
     outline = [u.vec_to_internal(v, u.LENGTH) for v in h.outline]
     axis_angle = h.angle_on_rotor + h.swing_angle
     if h.mount == "welded":
@@ -224,3 +263,20 @@ def _build_granule(g: GranuleSpec) -> tuple[pymunk.Body, pymunk.Circle]:
     body.velocity = u.vec_to_internal(g.velocity, u.VELOCITY)
     body.angular_velocity = u.to_internal(g.angular_velocity, u.ANGULAR_VELOCITY)
     return body, pymunk.Circle(body, u.to_internal(g.radius, u.LENGTH))
+
+
+def _build_chamber(chamber: ChamberSpec, static: pymunk.Body) -> list[pymunk.Poly]:
+    """Quadrilaterals whose inner edges are tangent to the circle of radius ``chamber.radius``."""
+    n = chamber.segments
+    stretch = 1.0 / math.cos(math.pi / n)
+    inner = u.to_internal(chamber.radius, u.LENGTH) * stretch
+    outer = u.to_internal(chamber.radius + chamber.wall_thickness, u.LENGTH) * stretch
+    shapes = []
+    for i in range(n):
+        a0, a1 = 2 * math.pi * i / n, 2 * math.pi * (i + 1) / n
+        corners = [
+            (radius * math.cos(a), radius * math.sin(a))
+            for radius, a in ((inner, a0), (outer, a0), (outer, a1), (inner, a1))
+        ]
+        shapes.append(pymunk.Poly(static, corners))
+    return shapes

@@ -14,6 +14,10 @@ Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t
    normal relative velocity and the normal impulse.
 6. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
 
+With ``track_energy`` an :class:`~perga.engine.energy.EnergyMeter` also listens in step 3
+(``pre_solve``) and 5 (``post_solve``) and balances the rotor-driven bodies' angular momentum
+around each ``space.step``; :meth:`Simulation.energy` returns its ledger.
+
 Because positions move before velocities are updated (step 2 before 4), the state after a
 step is (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler,
 first order; in leapfrog terms the velocities are half a step ahead of the positions.
@@ -30,6 +34,7 @@ import pymunk
 from numpy.typing import NDArray
 
 from perga.engine import units as u
+from perga.engine.energy import EnergyLedger, EnergyMeter
 from perga.engine.scene import Scene
 from perga.engine.spec import HammerSpec
 
@@ -114,14 +119,21 @@ class ImpactRecorder:
 
 
 class Simulation:
-    """Steps a scene at the spec's fixed dt (see the module docstring for the step order)."""
+    """Steps a scene at the spec's fixed dt (see the module docstring for the step order).
 
-    def __init__(self, scene: Scene, *, record_impacts: bool = True) -> None:
+    record_impacts: keep an :class:`Impact` per granule-hammer impact; track_energy: measure
+    the energy ledger from now on (costs two Python callbacks per touching contact per step).
+    """
+
+    def __init__(
+        self, scene: Scene, *, record_impacts: bool = True, track_energy: bool = True
+    ) -> None:
         self.scene = scene
         self.dt = scene.spec.dt
         self.steps = 0
         self._dt_internal = u.to_internal(self.dt, u.TIME)
         self.recorder = ImpactRecorder(scene) if record_impacts else None
+        self.meter = EnergyMeter(scene) if track_energy else None
 
     @property
     def time(self) -> float:
@@ -137,8 +149,19 @@ class Simulation:
         """Advance by one time step dt."""
         if self.recorder is not None:
             self.recorder.time = (self.steps + 1) * self.dt
-        self.scene.space.step(self._dt_internal)
+        if self.meter is None:
+            self.scene.space.step(self._dt_internal)
+        else:
+            self.meter.before_step()
+            self.scene.space.step(self._dt_internal)
+            self.meter.after_step(self._dt_internal)
         self.steps += 1
+
+    def energy(self) -> EnergyLedger:
+        """The energy ledger since the simulation was created (J; needs ``track_energy``)."""
+        if self.meter is None:
+            raise RuntimeError("energy() needs Simulation(..., track_energy=True)")
+        return self.meter.ledger()
 
     def run(self, duration: float) -> int:
         """Advance by ``duration`` (s), rounded to a whole number of steps; returns the count."""
@@ -211,11 +234,4 @@ class Simulation:
 
 def _welded_com(spec: HammerSpec, shape: pymunk.Poly) -> pymunk.Vec2d:
     """World position (internal units) of a welded hammer's centre of mass."""
-    cx, cy = u.vec_to_internal(spec.centre_of_mass, u.LENGTH)
-    a = spec.angle_on_rotor + spec.swing_angle
-    hx = u.to_internal(spec.hinge_radius, u.LENGTH) * math.cos(spec.angle_on_rotor)
-    hy = u.to_internal(spec.hinge_radius, u.LENGTH) * math.sin(spec.angle_on_rotor)
-    local = pymunk.Vec2d(
-        hx + math.cos(a) * cx - math.sin(a) * cy, hy + math.sin(a) * cx + math.cos(a) * cy
-    )
-    return shape.body.local_to_world(local)
+    return shape.body.local_to_world(u.vec_to_internal(spec.centre_on_rotor, u.LENGTH))

@@ -6,7 +6,8 @@ A hammer's outline is given in its own frame: hinge at the origin, hammer axis a
 hinge sits at ``hinge_radius`` on the rotor at the polar angle ``angle_on_rotor``; the hammer
 axis makes ``swing_angle`` (α, rad, counter-clockwise) with the radial line through the hinge.
 
-Units: m, s, kg, rad; velocities m/s; moments of inertia kg·m²; gravity m/s².
+Units: m, s, kg, rad; velocities m/s; moments of inertia kg·m²; gravity m/s²; torques N·m;
+densities kg/m³.
 Invalid input raises ``ValueError`` listing every problem found.
 """
 
@@ -15,6 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from typing import Literal
+
+from perga.analytic.common import STANDARD_GRAVITY
 
 Vec2 = tuple[float, float]
 Mount = Literal["hinged", "welded", "free"]
@@ -25,9 +28,9 @@ def _raise(owner: str, problems: list[str]) -> None:
         raise ValueError(f"{owner}: " + "; ".join(problems))
 
 
-def _positive(problems: list[str], name: str, value: float, unit: str) -> None:
+def _positive(problems: list[str], name: str, value: float, unit: str = "") -> None:
     if not (math.isfinite(value) and value > 0):
-        problems.append(f"{name} must be finite and > 0 {unit} (got {value})")
+        problems.append(f"{name} must be finite and > 0{' ' + unit if unit else ''} (got {value})")
 
 
 def _finite_vec(problems: list[str], name: str, value: Vec2) -> None:
@@ -132,6 +135,21 @@ class HammerSpec:
         _raise("hammer", problems)
 
     @property
+    def hinge_position(self) -> Vec2:
+        """The hinge in the rotor frame (= the fixed frame at t = 0), m."""
+        return (
+            self.hinge_radius * math.cos(self.angle_on_rotor),
+            self.hinge_radius * math.sin(self.angle_on_rotor),
+        )
+
+    @property
+    def centre_on_rotor(self) -> Vec2:
+        """The centre of mass in the rotor frame at the initial swing angle, m."""
+        a = self.angle_on_rotor + self.swing_angle
+        (hx, hy), (cx, cy) = self.hinge_position, self.centre_of_mass
+        return (hx + math.cos(a) * cx - math.sin(a) * cy, hy + math.sin(a) * cx + math.cos(a) * cy)
+
+    @property
     def moment_about_centre(self) -> float:
         """I_C = I_A − M·|c|², kg·m² (parallel-axis theorem)."""
         cx, cy = self.centre_of_mass
@@ -200,13 +218,118 @@ class ContactSpec:
 
 
 @dataclass(frozen=True)
+class ChamberSpec:
+    """A round chamber wall centred on the rotor axis, static.
+
+    radius: inner radius, m; wall_thickness: m (thick walls stop fast granules tunnelling,
+    design §5); material: name in the contact table; segments: number of thick segments whose
+    inner faces touch the circle (>= 8). Hammers never collide with the wall.
+    """
+
+    radius: float
+    wall_thickness: float
+    material: str
+    segments: int = 96
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        _positive(problems, "radius", self.radius, "m")
+        _positive(problems, "wall_thickness", self.wall_thickness, "m")
+        if not (isinstance(self.segments, int) and self.segments >= 8):
+            problems.append(f"segments must be an integer >= 8 (got {self.segments!r})")
+        if not self.material:
+            problems.append("material must be a non-empty name")
+        _raise("chamber", problems)
+
+
+@dataclass(frozen=True)
+class FloorFrictionSpec:
+    """Coulomb friction of the floor under a horizontal rotor: deceleration friction·gravity
+    (m/s²) opposing a granule's velocity relative to the floor, which either turns with the
+    rotor ('corotating': floor velocity ω × r) or is at rest ('stationary')."""
+
+    floor: Literal["corotating", "stationary"]
+    friction: float
+    gravity: float = STANDARD_GRAVITY
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        if self.floor not in ("corotating", "stationary"):
+            problems.append(f"floor must be 'corotating' or 'stationary' (got {self.floor!r})")
+        if not (math.isfinite(self.friction) and self.friction >= 0):
+            problems.append(f"friction must be finite and >= 0 (got {self.friction})")
+        _positive(problems, "gravity", self.gravity, "m/s²")
+        _raise("floor friction", problems)
+
+
+@dataclass(frozen=True)
+class AirDragSpec:
+    """Quadratic air drag F = ½ ρ C_d A |v| v on every granule, air at rest.
+
+    air_density ρ: kg/m³; drag_coefficient C_d: -; thickness t: m, the disc granule's extent
+    out of the plane, so that its projected area seen edge-on is A = 2 r t (m²).
+    """
+
+    air_density: float
+    drag_coefficient: float
+    thickness: float
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        _positive(problems, "air_density", self.air_density, "kg/m³")
+        _positive(problems, "drag_coefficient", self.drag_coefficient)
+        _positive(problems, "thickness", self.thickness, "m")
+        _raise("air drag", problems)
+
+
+@dataclass(frozen=True)
+class DriveSpec:
+    """A rotor of finite inertia driven by a motor that holds ``RotorSpec.omega``.
+
+    inertia: the rotor's moment about its axis without its hammers, kg·m² (welded hammers add
+    their own moments about the axis); torque_limit: the largest motor torque, N·m.
+    """
+
+    inertia: float
+    torque_limit: float
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        _positive(problems, "inertia", self.inertia, "kg·m²")
+        _positive(problems, "torque_limit", self.torque_limit, "N·m")
+        _raise("drive", problems)
+
+
+@dataclass(frozen=True)
+class EffectsSpec:
+    """Optional physics; each ``None`` effect is not built at all (no handler, velocity
+    function, constraint or per-step work).
+
+    floor_friction: horizontal rotor only (SceneSpec.gravity must be zero); air_drag;
+    hinge_friction: Coulomb torque at every hinge, N·m (> 0); drive: finite rotor inertia.
+    """
+
+    floor_friction: FloorFrictionSpec | None = None
+    air_drag: AirDragSpec | None = None
+    hinge_friction: float | None = None
+    drive: DriveSpec | None = None
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        if self.hinge_friction is not None:
+            _positive(problems, "hinge_friction", self.hinge_friction, "N·m")
+        _raise("effects", problems)
+
+
+@dataclass(frozen=True)
 class SceneSpec:
     """Everything the engine builds a scene from.
 
     dt: time step, s (> 0); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
     gravity, m/s² (zero for a horizontal rotor); granule_collisions: whether granules collide
-    with each other. Every material pair that can touch must be in ``contacts`` exactly once.
-    Hammers never collide with each other or with the rotor.
+    with each other; chamber: the round wall, or None; effects: optional physics. Every
+    material pair that can touch must be in ``contacts`` exactly once. Hammers never collide
+    with each other, with the rotor or with the chamber wall.
     """
 
     rotor: RotorSpec
@@ -217,6 +340,8 @@ class SceneSpec:
     iterations: int = 10
     gravity: Vec2 = (0.0, 0.0)
     granule_collisions: bool = False
+    chamber: ChamberSpec | None = None
+    effects: EffectsSpec = EffectsSpec()
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -227,6 +352,8 @@ class SceneSpec:
         if not (isinstance(self.iterations, int) and self.iterations >= 1):
             problems.append(f"iterations must be an integer >= 1 (got {self.iterations!r})")
         _finite_vec(problems, "gravity", self.gravity)
+        if self.effects.floor_friction is not None and tuple(self.gravity) != (0.0, 0.0):
+            problems.append("floor_friction needs a horizontal rotor (gravity must be (0, 0))")
         table: dict[frozenset[str], ContactSpec] = {}
         for contact in self.contacts:
             if contact.key in table:
@@ -247,6 +374,8 @@ class SceneSpec:
         pairs = {frozenset((g, h)) for g in granule_materials for h in hammer_materials}
         if self.granule_collisions:
             pairs |= {frozenset((a, b)) for a in granule_materials for b in granule_materials}
+        if self.chamber is not None:
+            pairs |= {frozenset((g, self.chamber.material)) for g in granule_materials}
         return pairs
 
     def contact(self, material_a: str, material_b: str) -> ContactSpec:
