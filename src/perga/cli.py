@@ -72,6 +72,49 @@ def _schema(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from perga.runner import RunStoppedError, prepare_directory, run_case
+
+    case = load_case(args.case)
+    directory = args.output or Path(case.output.directory.format(case=args.case.stem))
+    try:
+        prepare_directory(directory, args.overwrite)
+    except FileExistsError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    bar = tqdm(
+        total=case.solver.duration,
+        unit="s(sim)",
+        bar_format="{l_bar}{bar}| {n:.4f}/{total:.4f} s simulated [{elapsed}<{remaining}{postfix}]",
+        disable=args.quiet,
+    )
+
+    def progress(t: float, _duration: float, steps: int) -> None:
+        bar.update(min(t, bar.total) - bar.n)
+        bar.set_postfix_str(f"{steps / max(bar.format_dict['elapsed'], 1e-9):.0f} steps/s")
+
+    try:
+        summary = run_case(case, args.case, directory, progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"interrupted: everything up to now is in {directory}", file=sys.stderr)
+        return 130
+    except RunStoppedError as exc:
+        bar.close()
+        print(f"error: the run stopped: {exc}\nwhat was written is in {directory}", file=sys.stderr)
+        return 1
+    bar.close()
+    print(
+        f"{summary.status}: {summary.steps} steps, {summary.simulated_time:.4g} s simulated in "
+        f"{summary.wall_time:.3g} s, {summary.impacts} impacts -> {directory}"
+    )
+    for warning in summary.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
@@ -96,6 +139,12 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--format", choices=("text", "markdown", "json"), default="text")
     check.add_argument("--plots", metavar="DIR", help="write one PNG per claim into DIR")
     check.set_defaults(handler=_paper_check)
+    run = sub.add_parser("run", help="simulate a case: tables and summary.json in a run directory")
+    run.add_argument("case", type=Path, metavar="CASE")
+    run.add_argument("-o", "--output", type=Path, help="run directory (default: output.directory)")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(handler=_run)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)

@@ -13,7 +13,8 @@ import math
 import numpy as np
 
 from perga.analytic.contact import tunnelling_time_step
-from perga.case.schema import Case, ExplicitPlacement, RandomPlacement, RingPlacement
+from perga.case.placement import initial_state
+from perga.case.schema import Case, ExplicitPlacement, RandomPlacement
 
 MAX_ROTATION_PER_STEP = 0.05
 """Largest rotor turn in one step, rad (about 3°): hinge and contact geometry stay resolved."""
@@ -78,17 +79,6 @@ def _hammers(case: Case) -> list[str]:
     return problems
 
 
-def granule_positions(case: Case) -> np.ndarray | None:
-    """Start positions (n, 2) in m for explicit and ring placements; None for random ones."""
-    g, placement = case.granules, case.granules.placement
-    if isinstance(placement, ExplicitPlacement):
-        return np.array(placement.positions, dtype=float)
-    if isinstance(placement, RingPlacement):
-        angles = placement.phase + 2 * math.pi * np.arange(g.count) / g.count
-        return placement.radius * np.column_stack((np.cos(angles), np.sin(angles)))
-    return None
-
-
 def _granules(case: Case) -> list[str]:
     g, placement = case.granules, case.granules.placement
     if placement is None or case.chamber is None:
@@ -124,7 +114,7 @@ def _granules(case: Case) -> list[str]:
                     f"random pack needs <= {MAX_RANDOM_PACKING:.0%}: fewer granules or a wider ring"
                 )
         return problems
-    positions = granule_positions(case)
+    positions, _ = initial_state(case)
     distance = np.hypot(positions[:, 0], positions[:, 1])
     for i in np.nonzero(distance > limit)[0]:
         problems.append(

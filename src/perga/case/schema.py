@@ -262,7 +262,12 @@ class Solver(Strict):
     dt: float | Literal["auto"] = Field(
         "auto", description="time step, s, in (0, 0.01], or 'auto' (from contact and tunnelling)"
     )
-    substeps: int = Field(1, ge=1, le=1000, description="substeps per recorded step, in [1, 1000]")
+    substeps: int = Field(
+        1,
+        ge=1,
+        le=1000,
+        description="Pymunk steps per time step dt (each of dt/substeps), in [1, 1000]",
+    )
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
     duration: float = Field(0.1, gt=0, le=3600, description="simulated time, s, in (0, 3600]")
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")

@@ -1,0 +1,86 @@
+"""Where the granules start: positions (m) and velocities (m/s) from a case's placement.
+
+Pure numpy, no Pymunk: the cross-checks and the scene builder share it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from perga.case.schema import Case, ExplicitPlacement, RandomPlacement, RingPlacement
+
+FloatArray = NDArray[np.float64]
+
+MAX_ATTEMPTS_PER_GRANULE = 1000
+"""Random sequential addition gives up after this many rejected tries per granule on average."""
+
+
+class PlacementError(ValueError):
+    """The placement cannot be realised (e.g. the random pack does not fit)."""
+
+
+def ring(count: int, radius: float, phase: float) -> FloatArray:
+    """``count`` points evenly spaced on a circle of ``radius`` (m), the first at ``phase``."""
+    angles = phase + 2 * math.pi * np.arange(count) / count
+    return radius * np.column_stack((np.cos(angles), np.sin(angles)))
+
+
+def random_pack(count: int, radius: float, inner: float, outer: float, seed: int) -> FloatArray:
+    """Non-overlapping discs of ``radius`` (m) with centres uniform in the annulus
+    inner ≤ r ≤ outer (m), by random sequential addition with a cell grid (cells of 2·radius).
+
+    Deterministic for a given seed. Raises :class:`PlacementError` when it cannot place them all.
+    """
+    rng = np.random.default_rng(seed)
+    cell = 2 * radius
+    grid: dict[tuple[int, int], list[int]] = {}
+    placed = np.empty((count, 2))
+    n, attempts = 0, 0
+    while n < count:
+        attempts += 1
+        if attempts > MAX_ATTEMPTS_PER_GRANULE * count:
+            raise PlacementError(
+                f"random placement fitted only {n} of {count} granules of radius {radius:g} m "
+                f"in the annulus [{inner:g}, {outer:g}] m: use fewer granules or a wider annulus"
+            )
+        r = math.sqrt(rng.uniform(inner**2, outer**2))
+        theta = rng.uniform(0, 2 * math.pi)
+        x, y = r * math.cos(theta), r * math.sin(theta)
+        ci, cj = math.floor(x / cell), math.floor(y / cell)
+        if any(
+            (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < cell * cell
+            for di in (-1, 0, 1)
+            for dj in (-1, 0, 1)
+            for k in grid.get((ci + di, cj + dj), ())
+        ):
+            continue
+        placed[n] = x, y
+        grid.setdefault((ci, cj), []).append(n)
+        n += 1
+    return placed
+
+
+def initial_state(case: Case) -> tuple[FloatArray, FloatArray]:
+    """(positions, velocities), shapes (n, 2), SI, of every granule at t = 0 (at rest unless the
+    explicit placement gives velocities). Raises ValueError if the case has no placement."""
+    g, placement = case.granules, case.granules.placement
+    if isinstance(placement, ExplicitPlacement):
+        positions = np.array(placement.positions, dtype=float)
+        velocities = (
+            np.array(placement.velocities, dtype=float)
+            if placement.velocities
+            else np.zeros_like(positions)
+        )
+        return positions, velocities
+    if isinstance(placement, RingPlacement):
+        positions = ring(g.count, placement.radius, placement.phase)
+    elif isinstance(placement, RandomPlacement):
+        positions = random_pack(
+            g.count, g.radius, placement.inner_radius, placement.outer_radius, placement.seed
+        )
+    else:
+        raise ValueError("granules.placement is missing: a simulation needs start positions")
+    return positions, np.zeros_like(positions)

@@ -1,0 +1,123 @@
+"""Case (the validated case file) -> SceneSpec (what the engine builds): the one mapping.
+
+Plate hammers become rectangles in the hammer frame (hinge at the origin, axis +x), spaced
+evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
+(:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
+listed in the case, and only those, become the scene's effects.
+"""
+
+from __future__ import annotations
+
+import math
+
+from perga.case.checks import resolved_time_step
+from perga.case.placement import initial_state
+from perga.case.schema import Case
+from perga.engine.spec import (
+    AirDragSpec,
+    ChamberSpec,
+    ContactSpec,
+    DriveSpec,
+    EffectsSpec,
+    FloorFrictionSpec,
+    GranuleSpec,
+    HammerSpec,
+    RotorSpec,
+    SceneSpec,
+)
+
+
+def _hammers(case: Case) -> tuple[HammerSpec, ...]:
+    h, plate = case.hammers, case.hammer_plate
+    x0, x1 = -h.shape.hinge_offset, h.shape.length - h.shape.hinge_offset
+    y = h.shape.width / 2
+    outline = ((x0, -y), (x1, -y), (x1, y), (x0, y))
+    angles = h.angles or tuple(2 * math.pi * i / h.count for i in range(h.count))
+    return tuple(
+        HammerSpec(
+            outline=outline,
+            mass=h.mass,
+            moment_about_hinge=plate.inertia_about_hinge,
+            centre_of_mass=(plate.hinge_to_centre_of_mass, 0.0),
+            hinge_radius=h.hinge_radius,
+            angle_on_rotor=angle,
+            mount=h.mount,
+            material=h.material,
+        )
+        for angle in angles
+    )
+
+
+def _granules(case: Case) -> tuple[GranuleSpec, ...]:
+    g = case.granules
+    positions, velocities = initial_state(case)
+    return tuple(
+        GranuleSpec(
+            position=(float(p[0]), float(p[1])),
+            velocity=(float(v[0]), float(v[1])),
+            radius=g.radius,
+            mass=g.mass,
+            material=g.material,
+            rolls=g.rolls,
+        )
+        for p, v in zip(positions, velocities, strict=True)
+    )
+
+
+def granule_thickness(case: Case) -> float:
+    """Out-of-plane thickness of a disc granule from its mass and density, m."""
+    g = case.granules
+    return g.mass / (case.materials[g.material].density * math.pi * g.radius**2)
+
+
+def _effects(case: Case) -> EffectsSpec:
+    fx = case.effects
+    floor = fx.floor_friction
+    drag = fx.air_drag
+    return EffectsSpec(
+        floor_friction=FloorFrictionSpec(floor.floor, floor.friction, case.gravity)
+        if floor
+        else None,
+        air_drag=(
+            AirDragSpec(drag.air_density, drag.drag_coefficient, granule_thickness(case))
+            if drag
+            else None
+        ),
+        hinge_friction=case.hammers.hinge_friction if fx.hinge_friction else None,
+        drive=(
+            DriveSpec(case.rotor.inertia, case.rotor.torque_limit) if fx.rotor_inertia else None
+        ),
+    )
+
+
+def scene_spec(case: Case) -> SceneSpec:
+    """The engine's description of a validated case (raises ValueError without a placement or
+    a chamber: a simulation needs both)."""
+    if case.chamber is None:
+        raise ValueError("chamber is missing: a simulation needs the wall around the rotor")
+    granules = _granules(case)
+    hammers = _hammers(case)
+    pairs = {frozenset((case.granules.material, case.hammers.material))}
+    pairs.add(frozenset((case.granules.material, case.chamber.material)))
+    if case.effects.granule_collisions:
+        pairs.add(frozenset((case.granules.material,)))
+    contacts = tuple(
+        ContactSpec(c.pair[0], c.pair[1], c.restitution, c.friction)
+        for c in case.contacts
+        if frozenset(c.pair) in pairs
+    )
+    gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
+    return SceneSpec(
+        rotor=RotorSpec(case.rotor.angular_velocity, case.rotor.radius),
+        hammers=hammers,
+        granules=granules,
+        contacts=contacts,
+        dt=resolved_time_step(case) / case.solver.substeps,
+        iterations=case.solver.iterations,
+        gravity=gravity,
+        granule_collisions=case.effects.granule_collisions is not None,
+        chamber=ChamberSpec(
+            case.chamber.radius, case.chamber.wall_thickness, case.chamber.material
+        ),
+        effects=_effects(case),
+    )

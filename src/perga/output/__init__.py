@@ -1,0 +1,1 @@
+"""Run output: CSV tables flushed as they grow, phase-locked recorders, summary.json."""

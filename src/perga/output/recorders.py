@@ -1,0 +1,159 @@
+"""Recorders triggered by simulated time, phase-locked: frame k is taken at the first step whose
+end time reaches k·every (never "every since the last"), so a run's frames do not drift.
+
+Each recorder owns one table; ``record(sim)`` appends a frame. Impacts are written as they occur.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from perga.engine import units as u
+from perga.engine.simulation import Simulation
+from perga.output.tables import Table
+
+
+class PhaseLock:
+    """Fires at t_k = k·every (s): ``due(t)`` is true once per k, at the first t ≥ t_k."""
+
+    def __init__(self, every: float) -> None:
+        if not every > 0:
+            raise ValueError(f"every must be > 0 s (got {every})")
+        self.every = every
+        self.frame = 0
+
+    def due(self, t: float) -> bool:
+        """True if frame k is due at time t (then k advances past t)."""
+        # a relative tolerance of 1e-9 absorbs round-off in steps·dt against k·every
+        if t + 1e-9 * self.every < self.frame * self.every:
+            return False
+        self.frame = math.floor(t / self.every + 1e-9) + 1
+        return True
+
+
+class GranuleRecorder:
+    """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed (SI)."""
+
+    columns = ("time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed")
+
+    def __init__(self, directory: Path) -> None:
+        self.table = Table(directory / "granules.csv", self.columns)
+
+    def record(self, sim: Simulation) -> None:
+        """Append one frame."""
+        p, v, w = (
+            sim.granule_positions(),
+            sim.granule_velocities(),
+            sim.granule_angular_velocities(),
+        )
+        speed = np.hypot(v[:, 0], v[:, 1])
+        t = sim.time
+        self.table.write(
+            (t, i, p[i, 0], p[i, 1], v[i, 0], v[i, 1], w[i], speed[i]) for i in range(len(p))
+        )
+
+
+class HammerRecorder:
+    """hammers.csv: time, id, swing_angle, angular_velocity, vx, vy of each hammer's centre of
+    mass, and the rotor's angle and angular velocity (id = -1)."""
+
+    columns = ("time", "id", "swing_angle", "angular_velocity", "vx", "vy")
+
+    def __init__(self, directory: Path) -> None:
+        self.table = Table(directory / "hammers.csv", self.columns)
+
+    def record(self, sim: Simulation) -> None:
+        """Append one frame."""
+        scene, t = sim.scene, sim.time
+        alpha, v = sim.hammer_swing_angles(), sim.hammer_velocities()
+        spin = [b.angular_velocity * u.ANGULAR_VELOCITY for b in scene.hammer_bodies]
+        rows = [
+            (t, -1, sim.rotor_angle(), scene.rotor.angular_velocity * u.ANGULAR_VELOCITY, 0.0, 0.0)
+        ]
+        rows += [(t, i, alpha[i], spin[i], v[i, 0], v[i, 1]) for i in range(len(alpha))]
+        self.table.write(rows)
+
+
+class ImpactRecorder:
+    """impacts.csv: every granule-hammer impact as it happens (see engine.simulation.Impact)."""
+
+    columns = (
+        "time",
+        "granule",
+        "hammer",
+        "normal_velocity_before",
+        "normal_velocity_after",
+        "normal_impulse",
+        "x",
+        "y",
+        "nx",
+        "ny",
+    )
+
+    def __init__(self, directory: Path) -> None:
+        self.table = Table(directory / "impacts.csv", self.columns)
+        self.written = 0
+
+    def record(self, sim: Simulation) -> None:
+        """Append the impacts recorded since the last call."""
+        new = sim.impacts[self.written :]
+        self.table.write(
+            (
+                i.time,
+                i.granule,
+                i.hammer,
+                i.normal_velocity_before,
+                i.normal_velocity_after,
+                i.normal_impulse,
+                *i.point,
+                *i.normal,
+            )
+            for i in new
+        )
+        self.written += len(new)
+
+
+class EnergyRecorder:
+    """energy.csv: the cumulative energy ledger at each frame (J)."""
+
+    columns = (
+        "time",
+        "kinetic",
+        "drive_work",
+        "contact_dissipation",
+        "friction",
+        "drag",
+        "closure",
+    )
+
+    def __init__(self, directory: Path) -> None:
+        self.table = Table(directory / "energy.csv", self.columns)
+
+    def record(self, sim: Simulation) -> None:
+        """Append one frame."""
+        e = sim.energy()
+        self.table.write(
+            [
+                (
+                    sim.time,
+                    e.kinetic,
+                    e.drive_work,
+                    e.contact_dissipation,
+                    e.friction,
+                    e.drag,
+                    e.closure,
+                )
+            ]
+        )
+
+
+RECORDERS = {
+    "granules": GranuleRecorder,
+    "hammers": HammerRecorder,
+    "impacts": ImpactRecorder,
+    "energy": EnergyRecorder,
+}
+"""Recorder class by the name used in the case file's output.record."""

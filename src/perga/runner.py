@@ -1,0 +1,160 @@
+"""``perga run``: a case file through the engine into a run directory.
+
+Path of a case: ``load_case`` (validation) -> ``scene_spec`` -> ``build_scene`` ->
+``Simulation`` stepped at the case's dt; after every step the phase-locked frame clock decides
+whether the recorders write (so the last frame is always written at the end). The run directory
+holds the case file as run, one CSV per recorder (flushed as written), and ``summary.json``,
+which is written whatever happens: completed, interrupted (Ctrl-C) or failed (NaN, a granule
+that left the chamber, an error), with the reason.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from perga.case.schema import Case
+from perga.engine.from_case import scene_spec
+from perga.engine.scene import build_scene
+from perga.engine.simulation import Simulation
+from perga.output.recorders import RECORDERS, PhaseLock
+
+
+class RunStoppedError(Exception):
+    """The simulation cannot go on; the message names the step, the granule and a remedy."""
+
+
+@dataclass
+class RunSummary:
+    """What summary.json holds (SI units)."""
+
+    case: str
+    status: str = "running"
+    reason: str = ""
+    steps: int = 0
+    dt: float = 0.0
+    simulated_time: float = 0.0
+    wall_time: float = 0.0
+    steps_per_second: float = 0.0
+    granules: int = 0
+    hammers: int = 0
+    impacts: int = 0
+    frames: int = 0
+    energy: dict[str, float] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+
+def prepare_directory(directory: Path, overwrite: bool) -> None:
+    """Create the run directory; refuse a non-empty one unless ``overwrite`` (FileExistsError)."""
+    if directory.exists() and any(directory.iterdir()):
+        if not overwrite:
+            raise FileExistsError(
+                f"{directory} already holds a run: choose another -o DIR or pass --overwrite"
+            )
+        shutil.rmtree(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+
+
+def check_granules(sim: Simulation, chamber_radius: float, wall_thickness: float) -> None:
+    """Raise RunStoppedError for a non-finite state or a granule outside the chamber wall."""
+    p, v = sim.granule_positions(), sim.granule_velocities()
+    bad = np.nonzero(~np.all(np.isfinite(np.hstack((p, v))), axis=1))[0]
+    if bad.size:
+        raise RunStoppedError(
+            f"step {sim.steps} (t = {sim.time:.6g} s): granule {bad[0]} has a non-finite "
+            f"position or velocity; reduce solver.dt (now {sim.dt:.3g} s)"
+        )
+    r = np.hypot(p[:, 0], p[:, 1])
+    out = np.nonzero(r > chamber_radius + wall_thickness)[0]
+    if out.size:
+        i = out[0]
+        raise RunStoppedError(
+            f"step {sim.steps} (t = {sim.time:.6g} s): granule {i} left the chamber "
+            f"(r = {r[i]:.4g} m > wall at {chamber_radius:g} m + {wall_thickness:g} m): it "
+            f"tunnelled through the wall; reduce solver.dt (now {sim.dt:.3g} s) or increase "
+            "chamber.wall_thickness"
+        )
+
+
+Progress = Callable[[float, float, int], None]
+"""progress(simulated time s, duration s, steps) — called now and then by :func:`run_case`."""
+
+
+def run_case(
+    case: Case, case_path: Path, directory: Path, progress: Progress | None = None
+) -> RunSummary:
+    """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
+    is also written to summary.json. KeyboardInterrupt and RunStoppedError are recorded in the
+    summary and re-raised after everything written so far is flushed."""
+    shutil.copyfile(case_path, directory / "case.toml")
+    summary = RunSummary(case=str(case_path))
+    start = time.perf_counter()
+    recorders: list = []
+    sim: Simulation | None = None
+    try:
+        spec = scene_spec(case)
+        sim = Simulation(build_scene(spec), record_impacts="impacts" in case.output.record)
+        summary.dt, summary.granules, summary.hammers = (
+            spec.dt,
+            len(spec.granules),
+            len(spec.hammers),
+        )
+        recorders = [RECORDERS[name](directory) for name in case.output.record if name in RECORDERS]
+        frames = PhaseLock(case.output.every)
+        n_steps = math.ceil(case.solver.duration / spec.dt - 1e-9)
+        chamber = case.chamber
+        report_every = max(1, n_steps // 200)
+
+        def write_frame() -> None:
+            check_granules(sim, chamber.radius, chamber.wall_thickness)
+            for recorder in recorders:
+                recorder.record(sim)
+            summary.frames += 1
+
+        frames.due(0.0)
+        write_frame()
+        for _ in range(n_steps):
+            sim.step()
+            last = sim.steps == n_steps
+            if frames.due(sim.time) or last:
+                write_frame()
+            if progress and (sim.steps % report_every == 0 or last):
+                progress(sim.time, case.solver.duration, sim.steps)
+        summary.status = "completed"
+    except KeyboardInterrupt:
+        summary.status, summary.reason = "interrupted", "stopped by the user (Ctrl-C)"
+        raise
+    except RunStoppedError as exc:
+        summary.status, summary.reason = "failed", str(exc)
+        raise
+    except Exception as exc:
+        summary.status, summary.reason = "failed", f"{type(exc).__name__}: {exc}"
+        raise
+    finally:
+        _finish(summary, sim, recorders, time.perf_counter() - start, directory)
+    return summary
+
+
+def _finish(
+    summary: RunSummary, sim: Simulation | None, recorders: list, wall: float, directory: Path
+) -> None:
+    for recorder in recorders:
+        recorder.table.close()
+    summary.wall_time = wall
+    if sim is not None:
+        summary.steps, summary.simulated_time = sim.steps, sim.time
+        summary.steps_per_second = sim.steps / wall if wall > 0 else 0.0
+        summary.impacts = len(sim.impacts)
+        if hasattr(sim, "energy"):
+            summary.energy = asdict(sim.energy())
+            closure = summary.energy.get("closure", 0.0)
+            if abs(closure) > 0.01:
+                summary.warnings.append(f"energy ledger closes to {closure:.2%} only (> 1 %)")
+    (directory / "summary.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
