@@ -58,6 +58,10 @@ def _names(case: Case) -> list[str]:
 def _hammers(case: Case) -> list[str]:
     h = case.hammers
     problems = []
+    if h.mount != "free" and h.velocity != (0.0, 0.0):
+        problems.append(f"hammers.velocity: only for mount = 'free' (got {h.velocity})")
+    if h.mount == "welded" and h.swing_angle != 0.0:
+        problems.append(f"hammers.swing_angle: a welded hammer is radial (got {h.swing_angle})")
     if h.angles is not None and len(h.angles) != h.count:
         problems.append(
             f"hammers.angles: needs one angle per hammer, {h.count} (got {len(h.angles)})"

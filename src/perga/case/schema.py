@@ -82,8 +82,20 @@ class Hammers(Strict):
     hinge_radius: float = Field(
         ge=0, le=5, description="radius R of the hinge (or weld) point, m, in [0, 5]"
     )
-    mount: Literal["hinged", "welded"] = Field(
-        "hinged", description="'hinged' (free to swing on a pivot) or 'welded' to the rotor"
+    mount: Literal["hinged", "welded", "free"] = Field(
+        "hinged",
+        description="'hinged' (free to swing on a pivot), 'welded' to the rotor, or 'free' "
+        "(not attached: calibration scenes, e.g. a two-body impact; moves with velocity)",
+    )
+    swing_angle: float = Field(
+        0.0,
+        ge=-3.1416,
+        le=3.1416,
+        description="initial angle α of each hammer to the radial "
+        "line through its hinge, rad, in [−π, π] (hinged and free hammers)",
+    )
+    velocity: tuple[float, float] = Field(
+        (0.0, 0.0), description="initial centre-of-mass velocity of a free hammer, m/s"
     )
     material: str = Field("steel", description="name of a [materials] entry")
     angles: tuple[float, ...] | None = Field(

@@ -43,6 +43,8 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
             angle_on_rotor=angle,
             mount=h.mount,
             material=h.material,
+            swing_angle=h.swing_angle,
+            velocity=h.velocity,
         )
         for angle in angles
     )
