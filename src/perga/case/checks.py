@@ -164,10 +164,10 @@ def _effects(case: Case) -> list[str]:
 
 def fastest_relative_speed(case: Case) -> float:
     """Upper bound on a granule's speed relative to a hammer or the wall, m/s: the hammer tip's
-    speed plus the fastest initial granule speed."""
+    speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed."""
     h = case.hammers
     tip = h.hinge_radius + h.shape.length - h.shape.hinge_offset
-    speed = case.rotor.angular_velocity * tip
+    speed = case.rotor.angular_velocity * tip + math.hypot(*h.velocity)
     placement = case.granules.placement
     if isinstance(placement, ExplicitPlacement) and placement.velocities:
         speed += float(np.max(np.hypot(*np.array(placement.velocities, dtype=float).T)))

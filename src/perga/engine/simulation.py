@@ -215,6 +215,13 @@ class Simulation:
                 out.append(body.angle - rotor_angle - spec.angle_on_rotor)
         return np.array(out, dtype=float)
 
+    def hammer_angular_velocities(self) -> FloatArray:
+        """Absolute angular velocity of each hammer, (n,) array, rad/s (welded: the rotor's)."""
+        return (
+            np.array([b.angular_velocity for b in self.scene.hammer_bodies], dtype=float)
+            * u.ANGULAR_VELOCITY
+        )
+
     def hammer_velocities(self) -> FloatArray:
         """Centre-of-mass velocity of each hammer, (n, 2) array, m/s (welded: the rotor's
         velocity at the hammer's centre of mass)."""

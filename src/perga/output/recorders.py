@@ -69,7 +69,7 @@ class HammerRecorder:
         """Append one frame."""
         scene, t = sim.scene, sim.time
         alpha, v = sim.hammer_swing_angles(), sim.hammer_velocities()
-        spin = [b.angular_velocity * u.ANGULAR_VELOCITY for b in scene.hammer_bodies]
+        spin = sim.hammer_angular_velocities()
         rows = [
             (t, -1, sim.rotor_angle(), scene.rotor.angular_velocity * u.ANGULAR_VELOCITY, 0.0, 0.0)
         ]
