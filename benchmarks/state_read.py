@@ -1,0 +1,72 @@
+"""Cost of reading granule state: ``perga.engine.state.GranuleReader`` (pymunk.batch) against the
+per-body Python loop of ``Simulation.granule_positions`` & co.
+
+Scene: the one of ``engine_vs_pymunk.py`` (rotor, 6 hinged hammers, chamber), after 20 steps so
+that the state is not the initial one. Reported: median µs per read over --repeats reads.
+
+    python benchmarks/state_read.py                      # ~10 s
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from perga.engine import Simulation, build_scene
+from perga.engine.state import GranuleReader
+
+sys.path.insert(0, str(Path(__file__).parent))
+from engine_vs_pymunk import perga_spec
+
+
+def median_us(read: Callable[[], object], repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        read()
+        times.append(time.perf_counter() - t0)
+    return 1e6 * statistics.median(times)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--sizes", type=int, nargs="+", default=[1000, 5000])
+    p.add_argument("--repeats", type=int, default=50)
+    args = p.parse_args(argv)
+    print(
+        "| granules | loop: positions + velocities + ω, µs | reader.read(), µs | speed-up |"
+        " reader.positions(), µs |"
+    )
+    print("|---:|---:|---:|---:|---:|")
+    for n in args.sizes:
+        sim = Simulation(
+            build_scene(perga_spec(n, chamber=True)), record_impacts=False, track_energy=False
+        )
+        for _ in range(20):
+            sim.step()
+        reader = GranuleReader(sim.scene)
+        state = reader.read()
+        assert np.array_equal(state.positions, sim.granule_positions())
+        assert np.array_equal(state.velocities, sim.granule_velocities())
+        assert np.array_equal(state.angular_velocities, sim.granule_angular_velocities())
+
+        def loop(sim: Simulation = sim) -> None:
+            sim.granule_positions()
+            sim.granule_velocities()
+            sim.granule_angular_velocities()
+
+        t_loop = median_us(loop, args.repeats)
+        t_batch = median_us(reader.read, args.repeats)
+        t_pos = median_us(reader.positions, args.repeats)
+        print(f"| {n} | {t_loop:.0f} | {t_batch:.0f} | {t_loop / t_batch:.0f}x | {t_pos:.0f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
