@@ -23,13 +23,15 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
   circle, 8e-5 m for R = 0.15 m, N = 96). They share the hammers' filter group.
 * Effects: :mod:`perga.engine.effects` builds exactly the effects the spec lists, after
   everything else (the drive turns the rotor into a dynamic body).
-* Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Every shape gets
-  elasticity = friction = 1 and each material-pair handler sets ``arbiter.restitution`` and
-  ``arbiter.friction`` in ``pre_solve`` to the pair's exact values (Chipmunk resets them to
-  the product every step, so it must be ``pre_solve``, not ``begin``). Collision types are
-  one per (kind, material); handlers are registered only for pairs that can touch. Each
-  handler phase runs a list of listeners (:meth:`Scene.listen`), so that the pair setter, the
-  impact recorder and the energy meter can share one handler.
+* Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Each material gets
+  factors whose products equal the pair table (:func:`factor_pair_table`: one granule
+  material gives 1 on it and the pair value on the others; granule-granule pairs take √), to
+  within 1 ulp; only a pair the table cannot split this way gets a ``pre_solve`` handler that
+  sets ``arbiter.restitution`` and ``arbiter.friction`` (Chipmunk resets them to the product
+  every step, so it must be ``pre_solve``, not ``begin``). The callback is what made the
+  engine 1.5× bare Pymunk (docs/performance.md). Collision types are one per (kind,
+  material). Each handler phase runs a list of listeners (:meth:`Scene.listen`), so that the
+  pair setter, the impact recorder and the energy meter can share one handler.
 * Filters: all hammers and the chamber share one non-zero ``ShapeFilter`` group (hammers never
   collide with each other or with the wall); when ``granule_collisions`` is False all granules
   share another group, which removes granule pairs before the narrow phase.
@@ -123,6 +125,51 @@ def _dispatch(arbiter: pymunk.Arbiter, space: pymunk.Space, callbacks: list[Call
         callback(arbiter, space, None)
 
 
+def _ends(pair: frozenset[str]) -> tuple[str, str]:
+    """The two materials of a pair (the same one twice for a self pair)."""
+    items = sorted(pair)
+    return items[0], items[-1]
+
+
+def factor_pair_table(
+    table: dict[frozenset[str], float],
+) -> tuple[dict[str, float], set[frozenset[str]]]:
+    """Per-material factors whose pairwise products reproduce ``table`` (pair -> value).
+
+    A breadth-first walk over the material graph gives each material a factor from one pair,
+    starting from materials with a self pair (factor √value), else from factor 1; every pair
+    is then checked to a relative 4 ulp. Returns the factors and the pairs they do not
+    reproduce (those keep a per-contact setter). A zero factor stops the walk, so tables with
+    zeros split only where the zero can be carried by one material.
+    """
+    neighbours: dict[str, set[str]] = {}
+    for pair in table:
+        a, b = _ends(pair)
+        neighbours.setdefault(a, set()).add(b)
+        neighbours.setdefault(b, set()).add(a)
+    roots = sorted(neighbours, key=lambda m: (frozenset((m,)) not in table, m))
+    factors: dict[str, float] = {}
+    for root in roots:
+        if root in factors:
+            continue
+        self_value = table.get(frozenset((root,)))
+        factors[root] = math.sqrt(self_value) if self_value is not None else 1.0
+        queue = [root]
+        while queue:
+            a = queue.pop(0)
+            for b in sorted(neighbours[a]):
+                if b not in factors and factors[a] > 0:
+                    factors[b] = table[frozenset((a, b))] / factors[a]
+                    queue.append(b)
+    unsplit = set()
+    for pair, value in table.items():
+        a, b = _ends(pair)
+        product = factors.get(a, math.nan) * factors.get(b, math.nan)
+        if not (math.isfinite(product) and abs(product - value) <= 4 * 2.2e-16 * abs(value)):
+            unsplit.add(pair)
+    return factors, unsplit
+
+
 def _pair_setter(restitution: float, friction: float) -> Callback:
     def set_pair(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: Any) -> None:
         arbiter.restitution, arbiter.friction = restitution, friction
@@ -153,9 +200,14 @@ def build_scene(spec: SceneSpec) -> Scene:
     def ctype(kind: Kind, material: str) -> int:
         return collision_types.setdefault((kind, material), len(collision_types) + 1)
 
+    contacts = {c.key: c for c in spec.contacts}
+    elasticity, unsplit_e = factor_pair_table({k: c.restitution for k, c in contacts.items()})
+    friction, unsplit_f = factor_pair_table({k: c.friction for k, c in contacts.items()})
+
     def add_shape(shape: pymunk.Shape, kind: Kind, material: str, group: int) -> None:
         shape.filter = pymunk.ShapeFilter(group=group)
-        shape.elasticity = shape.friction = 1.0
+        shape.elasticity = elasticity.get(material, 1.0)
+        shape.friction = friction.get(material, 1.0)
         shape.collision_type = ctype(kind, material)
         space.add(shape)
 
@@ -214,9 +266,10 @@ def build_scene(spec: SceneSpec) -> Scene:
         contact = spec.contact(key_a[1], key_b[1])
         type_a, type_b = collision_types[key_a], collision_types[key_b]
         scene.pairs.append((type_a, type_b))
-        scene._listen_pair(
-            type_a, type_b, "pre_solve", _pair_setter(contact.restitution, contact.friction)
-        )
+        if contact.key in unsplit_e | unsplit_f:
+            scene._listen_pair(
+                type_a, type_b, "pre_solve", _pair_setter(contact.restitution, contact.friction)
+            )
     scene.effects = build_effects(scene)
     return scene
 
