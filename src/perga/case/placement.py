@@ -79,7 +79,11 @@ def initial_state(case: Case) -> tuple[FloatArray, FloatArray]:
         positions = ring(g.count, placement.radius, placement.phase)
     elif isinstance(placement, RandomPlacement):
         positions = random_pack(
-            g.count, g.radius, placement.inner_radius, placement.outer_radius, placement.seed
+            g.count,
+            g.radius,
+            placement.inner_radius,
+            placement.outer_radius,
+            case.solver.seed if placement.seed is None else placement.seed,
         )
     else:
         raise ValueError("granules.placement is missing: a simulation needs start positions")

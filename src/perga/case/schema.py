@@ -148,7 +148,9 @@ class RandomPlacement(Strict):
     kind: Literal["random"]
     inner_radius: float = Field(ge=0, le=5, description="inner radius of the annulus, m")
     outer_radius: float = Field(gt=0, le=5, description="outer radius of the annulus, m")
-    seed: int = Field(0, ge=0, description="seed of the random generator, >= 0")
+    seed: int | None = Field(
+        None, ge=0, description="seed of the random pack, >= 0; default: solver.seed"
+    )
 
 
 Placement = Annotated[
@@ -161,7 +163,16 @@ class Granules(Strict):
 
     count: int = Field(1, ge=1, le=1_000_000, description="number of granules, in [1, 1e6]")
     radius: float = Field(gt=0, le=0.05, description="disc radius, m, in (0, 0.05]")
-    mass: float = Field(gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]")
+    mass: float | None = Field(
+        None, gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]; or thickness"
+    )
+    thickness: float | None = Field(
+        None,
+        gt=0,
+        le=0.1,
+        description="out-of-plane length of a granule, m, in (0, 0.1]: mass = density·πr²·"
+        "thickness from its material; or give mass",
+    )
     material: str = Field("beebread", description="name of a [materials] entry")
     rolls: bool = Field(
         True, description="true: a disc that turns (I = m r²/2); false: a sliding point (I = ∞)"
@@ -169,6 +180,12 @@ class Granules(Strict):
     placement: Placement | None = Field(
         None, description="where the granules start (needed by perga run, not by paper-check)"
     )
+
+    @model_validator(mode="after")
+    def _mass_or_thickness(self) -> Granules:
+        if (self.mass is None) == (self.thickness is None):
+            raise ValueError("give exactly one of mass (kg) or thickness (m)")
+        return self
 
 
 class Material(Strict):
@@ -296,7 +313,7 @@ class Output(Strict):
 
     directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
     every: float = Field(1e-3, gt=0, description="recording interval in simulated time, s, > 0")
-    record: tuple[Literal["granules", "hammers", "impacts", "energy", "vtk"], ...] = Field(
+    record: tuple[Literal["granules", "hammers", "impacts", "energy"], ...] = Field(
         ("granules", "hammers", "impacts", "energy"), description="tables to write"
     )
 
@@ -329,6 +346,31 @@ class Case(Strict):
     def granule_hammer_contact(self) -> ContactPair:
         """The contact between the granule and hammer materials."""
         return self.contact(self.granules.material, self.hammers.material)
+
+    @property
+    def granule_density(self) -> float:
+        """Density of the granules' material, kg/m³."""
+        return self.materials[self.granules.material].density
+
+    @property
+    def granule_mass(self) -> float:
+        """Mass of one granule, kg: given, or density·πr²·thickness."""
+        g = self.granules
+        return (
+            g.mass
+            if g.mass is not None
+            else self.granule_density * math.pi * g.radius**2 * g.thickness
+        )
+
+    @property
+    def granule_thickness(self) -> float:
+        """Out-of-plane length of one granule, m: given, or mass/(density·πr²)."""
+        g = self.granules
+        return (
+            g.thickness
+            if g.thickness is not None
+            else g.mass / (self.granule_density * math.pi * g.radius**2)
+        )
 
     @property
     def hammer_plate(self) -> PlateHammer:

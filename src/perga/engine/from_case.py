@@ -58,18 +58,12 @@ def _granules(case: Case) -> tuple[GranuleSpec, ...]:
             position=(float(p[0]), float(p[1])),
             velocity=(float(v[0]), float(v[1])),
             radius=g.radius,
-            mass=g.mass,
+            mass=case.granule_mass,
             material=g.material,
             rolls=g.rolls,
         )
         for p, v in zip(positions, velocities, strict=True)
     )
-
-
-def granule_thickness(case: Case) -> float:
-    """Out-of-plane thickness of a disc granule from its mass and density, m."""
-    g = case.granules
-    return g.mass / (case.materials[g.material].density * math.pi * g.radius**2)
 
 
 def _effects(case: Case) -> EffectsSpec:
@@ -81,7 +75,7 @@ def _effects(case: Case) -> EffectsSpec:
         if floor
         else None,
         air_drag=(
-            AirDragSpec(drag.air_density, drag.drag_coefficient, granule_thickness(case))
+            AirDragSpec(drag.air_density, drag.drag_coefficient, case.granule_thickness)
             if drag
             else None
         ),

@@ -88,7 +88,7 @@ class Params:
             omega=case.rotor.angular_velocity,
             f=contact.friction,
             e=contact.restitution,
-            m=case.granules.mass,
+            m=case.granule_mass,
             R=case.hammers.hinge_radius,
             g=case.gravity,
             hammers=case.hammers.count,
