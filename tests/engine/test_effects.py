@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
+import numpy as np
 import pymunk
 import pytest
 
@@ -20,7 +22,9 @@ from perga.engine import (
     SceneSpec,
     Simulation,
     build_scene,
+    units,
 )
+from perga.engine.effects import AirDrag, FloorFriction
 from tests.engine.helpers import plate
 
 EFFECTS = {
@@ -74,7 +78,22 @@ def _trace(scene: Scene) -> dict[str, object]:
         ],
         "rotor_type": scene.rotor.body_type,
         "effects": len(scene.effects),
+        "kicked": _kicked(scene),
     }
+
+
+def _kicked(scene: Scene) -> list[int]:
+    """Bodies (indices in space.bodies, static body last) whose state the effects' per-step
+    hook (run by Simulation.step before space.step) changes, run once here."""
+    bodies = [*scene.space.bodies, scene.space.static_body]
+
+    def state() -> list[tuple[float, ...]]:
+        return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
+
+    before = state()
+    for effect in scene.effects:
+        effect.before_step(units.to_internal(scene.spec.dt, units.TIME))
+    return [i for i, (a, b) in enumerate(zip(before, state(), strict=True)) if a != b]
 
 
 def test_no_effect_leaves_no_trace() -> None:
@@ -84,6 +103,7 @@ def test_no_effect_leaves_no_trace() -> None:
     assert all(bare["velocity_funcs"])
     assert bare["rotor_type"] == pymunk.Body.KINEMATIC
     assert bare["effects"] == 0
+    assert bare["kicked"] == []
 
 
 @pytest.mark.parametrize("name", sorted(EFFECTS))
@@ -92,18 +112,124 @@ def test_each_effect_installs_only_itself(name: str) -> None:
     bare, one = _trace(_scene()), _trace(_scene(**{name: EFFECTS[name]}))
     changed = {key for key in bare if bare[key] != one[key]}
     expected = {
-        "floor_friction": {"velocity_funcs", "effects"},
-        "air_drag": {"velocity_funcs", "effects"},
+        "floor_friction": {"kicked", "effects"},
+        "air_drag": {"kicked", "effects"},
         "hinge_friction": {"constraints", "constraint_hooks", "effects"},
         "drive": {"constraints", "constraint_hooks", "rotor_type", "effects"},
     }[name]
     assert changed == expected
-    if "velocity_funcs" in changed:  # the granules' functions, not the hammers'
+    if "kicked" in changed:  # the granules' velocities, nothing else of any body
         scene = _scene(**{name: EFFECTS[name]})
-        kicked = {
-            b for b in scene.space.bodies if b.velocity_func is not pymunk.Body.update_velocity
-        }
-        assert kicked == set(scene.granule_bodies)
+        bodies = [*scene.space.bodies, scene.space.static_body]
+        assert {bodies[i] for i in _trace(scene)["kicked"]} == set(scene.granule_bodies)  # type: ignore[attr-defined]
+
+
+def test_both_kicks_share_one_runner() -> None:
+    """Floor friction and air drag together: one batch read and write per step, run by the
+    first kick in registry order (floor friction, then drag on the result)."""
+    scene = _scene(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"])
+    floor, drag = scene.effects
+    assert isinstance(floor, FloorFriction) and isinstance(drag, AirDrag)
+    assert floor._runner is not None and drag._runner is None
+    assert floor._runner.kicks == [floor, drag]
+
+
+def _per_granule(scene: Scene, dt: float) -> tuple[list[pymunk.Vec2d], float, float, float]:
+    """Reference: the kicks as the scalar per-body formulas of their docstrings (floor friction
+    then drag), and the energy each removes / the floor supplies, internal units."""
+    spec = scene.spec.effects
+    assert spec.floor_friction is not None and spec.air_drag is not None
+    a = units.to_internal(spec.floor_friction.friction * spec.floor_friction.gravity,
+                          units.ACCELERATION)  # fmt: skip
+    w = scene.rotor.angular_velocity
+    out, removed, supplied, dragged = [], 0.0, 0.0, 0.0
+    for g, body in zip(scene.spec.granules, scene.granule_bodies, strict=True):
+        v, p, m = body.velocity, body.position, body.mass
+        floor = pymunk.Vec2d(-w * p.y, w * p.x)
+        relative = v - floor
+        speed = relative.length
+        if speed > 0:
+            after = relative * (1.0 - min(a * dt, speed) / speed)
+            v = floor + after
+            removed += 0.5 * m * (speed * speed - after.dot(after))
+            supplied += m * (after - relative).dot(floor)
+        k = units.to_internal(
+            0.5 * spec.air_drag.air_density * spec.air_drag.drag_coefficient * 2 * g.radius
+            * spec.air_drag.thickness / g.mass, 1.0 / units.LENGTH,
+        )  # fmt: skip
+        speed = v.length
+        if speed > 0:
+            after_speed = speed / (1.0 + k * speed * dt)
+            dragged += 0.5 * m * (speed * speed - after_speed * after_speed)
+            v = v * (after_speed / speed)
+        out.append(v)
+    return out, removed, supplied, dragged
+
+
+def test_kicks_match_the_per_granule_formulas() -> None:
+    """The array kicks against the scalar formulas, granule by granule, over states that cover
+    a stopping (clamped) granule, one exactly at the floor's velocity and fast ones: velocities
+    and energies to 1e-14 (rounding of the same expressions in another order)."""
+    granules = [
+        GranuleSpec(
+            position=(0.03 * np.cos(t), 0.03 * np.sin(t)),
+            velocity=(vx, vy),
+            radius=0.002,
+            mass=m,
+            material="bb",
+        )
+        for t, vx, vy, m in (
+            (0.0, 0.0, 50.0 * 0.03 + 1e-5, 50e-6),  # 1e-5 m/s relative: stops (clamped)
+            (np.pi / 2, -50.0 * 0.03, 0.0, 60e-6),  # set exactly co-moving with the floor below
+            (1.0, 3.0, -2.0, 40e-6),
+            (2.5, -7.0, 0.5, 80e-6),
+            (4.0, 0.0, 0.0, 50e-6),
+        )
+    ]
+    spec = dataclasses.replace(
+        _scene().spec,
+        granules=tuple(granules),
+        effects=EffectsSpec(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"]),
+    )
+    scene = build_scene(spec)
+    w, co_moving = scene.rotor.angular_velocity, scene.granule_bodies[1]
+    co_moving.velocity = (-w * co_moving.position.y, w * co_moving.position.x)  # exactly
+    dt = units.to_internal(spec.dt, units.TIME)
+    expected, removed, supplied, dragged = _per_granule(scene, dt)
+    floor, drag = scene.effects
+    floor.before_step(dt)
+    for body, v in zip(scene.granule_bodies, expected, strict=True):
+        np.testing.assert_allclose(tuple(body.velocity), tuple(v), rtol=1e-14, atol=1e-300)
+    assert tuple(scene.granule_bodies[0].velocity) == tuple(expected[0])  # stopped on the floor
+    assert floor.removed == pytest.approx(removed * units.ENERGY, rel=1e-14)
+    assert floor.supplied == pytest.approx(supplied * units.ENERGY, rel=1e-14)
+    assert drag.removed == pytest.approx(dragged * units.ENERGY, rel=1e-14)
+    assert floor.removed > 0 and drag.removed > 0 and floor.supplied != 0
+
+
+def test_air_drag_closed_form() -> None:
+    """A granule coasting at 10 m/s in still air: dv/dt = −k v², v(t) = v0/(1 + k v0 t) exactly
+    at every step (the kick integrates the step exactly; measured 7e-16), x(t) = ln(1 + k v0 t)/k
+    to first order in dt (measured −4.4e-5 at dt = 1e-4 s), and the drag removed exactly the
+    kinetic energy lost (measured 1e-15)."""
+    rho, cd, th, r, m, v0, duration = 1.2, 1.0, 0.002, 0.002, 50e-6, 10.0, 0.2
+    k = 0.5 * rho * cd * 2 * r * th / m
+    granule = GranuleSpec(position=(0.0, 0.0), velocity=(v0, 0.0), radius=r, mass=m,
+                          material="bb")  # fmt: skip
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=0.0, radius=0.2), hammers=(), granules=(granule,), contacts=(),
+        dt=1e-4, effects=EffectsSpec(air_drag=AirDragSpec(rho, cd, th)),
+    )  # fmt: skip
+    sim = Simulation(build_scene(spec))
+    sim.run(duration)
+    (v,) = sim.granule_velocities()
+    (p,) = sim.granule_positions()
+    assert v[1] == 0.0 and p[1] == 0.0
+    assert v[0] == pytest.approx(v0 / (1 + k * v0 * duration), rel=1e-12)
+    assert p[0] == pytest.approx(math.log1p(k * v0 * duration) / k, rel=1e-4)
+    ledger = sim.energy()
+    assert ledger.drag == pytest.approx(0.5 * m * (v0**2 - v[0] ** 2), rel=1e-12)
+    assert abs(ledger.closure) < 1e-12
 
 
 def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:

@@ -1,7 +1,9 @@
-"""Batch state reads (perga.engine.state) against per-body reads in a Python loop.
+"""Batch state reads and velocity writes (perga.engine.state) against per-body reads and writes
+in a Python loop.
 
 Tolerance: exact. The reader multiplies the very float64 values Chipmunk holds by the same unit
-factor as the reference, so any difference would be a wrong row or column, not rounding.
+factor as the reference, so any difference would be a wrong row or column, not rounding; the
+writer writes float64 values and every other body's own bits back.
 """
 
 from __future__ import annotations
@@ -17,13 +19,14 @@ from perga.engine import (
     GranuleSpec,
     HammerSpec,
     RotorSpec,
+    Scene,
     SceneSpec,
     Simulation,
     build_scene,
 )
 from perga.engine import state as state_module
 from perga.engine import units as u
-from perga.engine.state import GranuleReader, GranuleState, granule_state
+from perga.engine.state import GranuleReader, GranuleState, GranuleWriter, granule_state
 from tests.engine.helpers import plate
 
 OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s
@@ -203,3 +206,129 @@ def test_no_granules() -> None:
     assert state.positions.shape == (0, 2)
     assert state.velocities.shape == (0, 2)
     assert state.angular_velocities.shape == (0,)
+
+
+# --- the writer ------------------------------------------------------------------------------
+
+
+def _everything(scene: Scene) -> list[tuple[float, ...]]:
+    """Every body's (static body included) position, angle, velocity and angular velocity."""
+    bodies = [*scene.space.bodies, scene.space.static_body]
+    return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
+
+
+def _others(scene: Scene) -> list[tuple[float, ...]]:
+    granules = set(scene.granule_bodies)
+    bodies = [b for b in scene.space.bodies if b not in granules] + [scene.space.static_body]
+    return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
+
+
+def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
+    scene = stepped.scene
+    writer = GranuleWriter(scene)  # its construction check writes and undoes: nothing changes
+    before, others = _loop(stepped), _others(scene)
+    _assert_same(writer.read(), before)
+    v, p = writer.read_internal(positions=True)
+    assert p is not None
+    np.testing.assert_array_equal(p * u.LENGTH, before.positions)
+    np.testing.assert_array_equal(v * u.VELOCITY, before.velocities)
+    assert writer.read_internal(positions=False)[1] is None
+
+    rng = np.random.default_rng(3)
+    new = rng.normal(scale=7.0, size=v.shape)
+    writer.write_internal_velocities(new)
+    got = np.array([tuple(b.velocity) for b in scene.granule_bodies])
+    np.testing.assert_array_equal(got, new)  # bit for bit, in spec order
+    after = _loop(stepped)
+    np.testing.assert_array_equal(after.positions, before.positions)
+    np.testing.assert_array_equal(after.angular_velocities, before.angular_velocities)
+    assert _others(scene) == others  # rotor, hammers, static body: every field unchanged
+    writer.write_internal_velocities(v)  # restore the module fixture
+    _assert_same(_loop(stepped), before)
+
+
+def test_writer_survives_reordering() -> None:
+    sim = Simulation(build_scene(_spec(n_rings=2)))
+    writer = GranuleWriter(sim.scene)
+    free = sim.scene.hammer_bodies[-1]
+    sim.scene.space.remove(free, *free.shapes)
+    assert sim.scene.space.static_body is not None
+    sim.run(2e-4)
+    others = _others(sim.scene)
+    new = np.arange(2.0 * writer.count).reshape(-1, 2)
+    writer.write_internal_velocities(new)
+    np.testing.assert_array_equal([tuple(b.velocity) for b in sim.scene.granule_bodies], new)
+    assert _others(sim.scene) == others
+
+
+def test_writer_rejects_bad_velocities() -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    before = _everything(scene)
+    v, _ = writer.read_internal(positions=False)
+    with pytest.raises(ValueError, match="shape"):
+        writer.write_internal_velocities(v[:-1])
+    with pytest.raises(ValueError, match="shape"):
+        writer.write_internal_velocities(v.ravel())
+    v[2, 1] = np.nan
+    with pytest.raises(ValueError, match=r"non-finite velocities for granules \[2\]"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+def test_writer_granule_missing_from_space_is_an_error() -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    v, _ = writer.read_internal(positions=False)
+    body = scene.granule_bodies[3]
+    scene.space.remove(body, *body.shapes)
+    before = _everything(scene)
+    with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    v, _ = writer.read_internal(positions=False)
+    real = state_module.pb.get_space_bodies
+
+    def short(space: pymunk.Space, fields: object, buffer: object) -> None:
+        real(space, fields, buffer)
+        buffer._float_arr.num -= 1
+
+    monkeypatch.setattr(state_module.pb, "get_space_bodies", short)
+    before = _everything(scene)
+    with pytest.raises(RuntimeError, match="expected 2 per body"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+@pytest.mark.parametrize("fault", ["no-op", "shifted"])
+def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: str) -> None:
+    """A set_space_bodies that writes nothing, or writes every body's row one body later (as a
+    changed layout would), fails the writer's construction check."""
+    scene = build_scene(_spec(n_rings=1))
+    real = state_module.pb.set_space_bodies
+
+    def faulty(space: pymunk.Space, fields: object, buffer: pymunk.batch.Buffer) -> None:
+        if fault == "shifted":
+            floats = np.frombuffer(buffer.float_buf(), dtype=np.float64)
+            floats[:] = np.roll(floats, 2)
+            real(space, fields, buffer)
+
+    monkeypatch.setattr(state_module.pb, "set_space_bodies", faulty)
+    with pytest.raises(RuntimeError, match="set_space_bodies check failed"):
+        GranuleWriter(scene)
+
+
+def test_writer_no_granules() -> None:
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=10.0, radius=0.1), hammers=(), granules=(), contacts=(), dt=1e-5
+    )
+    scene = build_scene(spec)
+    writer = GranuleWriter(scene)
+    v, p = writer.read_internal(positions=True)
+    assert v.shape == (0, 2) and p is not None and p.shape == (0, 2)
+    writer.write_internal_velocities(np.zeros((0, 2)))

@@ -2,7 +2,11 @@
 
 Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t_{n+1}):
 
-1. The impact recorder's clock is set to t_{n+1} = (n + 1)·dt.
+1. The impact recorder's clock is set to t_{n+1} = (n + 1)·dt. Then, only if the spec lists
+   them, the kicks (floor friction, air drag: :mod:`perga.engine.effects`) change all granules'
+   velocities at once from (x_n, v_n), one batch read and write: an operator split *before*
+   Chipmunk's step, so step 2 drifts with the kicked velocities and everything below (contact
+   callbacks, the energy meter's reads) sees them; the contacts' impulses (step 4) come after.
 2. Chipmunk advances every body's position and angle with its *current* velocity (the
    kinematic rotor turns by ω·dt, so its angle is ω·t exactly up to rounding).
 3. Collision detection at the new positions. New granule-hammer contacts call ``begin``: the
@@ -14,9 +18,11 @@ Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t
    normal relative velocity and the normal impulse.
 6. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
 
-With ``track_energy`` an :class:`~perga.engine.energy.EnergyMeter` also listens in step 3
-(``pre_solve``) and 5 (``post_solve``) and balances the rotor-driven bodies' angular momentum
-around each ``space.step``; :meth:`Simulation.energy` returns its ledger.
+With ``track_energy`` an :class:`~perga.engine.energy.EnergyMeter` reads every body's
+velocity (``pymunk.batch``) just before ``space.step`` (what ``pre_solve`` in step 3 would see)
+and the solved arbiters and the bodies just after it (what ``post_solve`` in step 5 would see),
+and balances the rotor-driven bodies' angular momentum around each ``space.step``;
+:meth:`Simulation.energy` returns its ledger.
 
 Because positions move before velocities are updated (step 2 before 4), the state after a
 step is (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler,
@@ -37,6 +43,7 @@ from perga.engine import units as u
 from perga.engine.energy import EnergyLedger, EnergyMeter
 from perga.engine.scene import Scene
 from perga.engine.spec import HammerSpec
+from perga.engine.state import GranuleReader
 
 FloatArray = NDArray[np.float64]
 
@@ -122,7 +129,8 @@ class Simulation:
     """Steps a scene at the spec's fixed dt (see the module docstring for the step order).
 
     record_impacts: keep an :class:`Impact` per granule-hammer impact; track_energy: measure
-    the energy ledger from now on (costs two Python callbacks per touching contact per step).
+    the energy ledger from now on (costs two ``pymunk.batch`` body reads and one arbiter read
+    per step, no Python callback: :mod:`~perga.engine.energy`).
     """
 
     def __init__(
@@ -134,6 +142,7 @@ class Simulation:
         self._dt_internal = u.to_internal(self.dt, u.TIME)
         self.recorder = ImpactRecorder(scene) if record_impacts else None
         self.meter = EnergyMeter(scene) if track_energy else None
+        self._reader: GranuleReader | None = None  # built on the first state read
 
     @property
     def time(self) -> float:
@@ -149,6 +158,8 @@ class Simulation:
         """Advance by one time step dt."""
         if self.recorder is not None:
             self.recorder.time = (self.steps + 1) * self.dt
+        for effect in self.scene.effects:  # the kicks (floor friction, air drag), if listed
+            effect.before_step(self._dt_internal)
         if self.meter is None:
             self.scene.space.step(self._dt_internal)
         else:
@@ -174,30 +185,22 @@ class Simulation:
 
     # --- state in SI -----------------------------------------------------------------------
 
+    def _granules(self) -> GranuleReader:
+        if self._reader is None:
+            self._reader = GranuleReader(self.scene)
+        return self._reader
+
     def granule_positions(self) -> FloatArray:
-        """Granule centres, (n, 2) array, m."""
-        return (
-            np.array([tuple(b.position) for b in self.scene.granule_bodies], dtype=float).reshape(
-                -1, 2
-            )
-            * u.LENGTH
-        )
+        """Granule centres, (n, 2) array, m (one ``pymunk.batch`` read: :mod:`.state`)."""
+        return self._granules().positions()
 
     def granule_velocities(self) -> FloatArray:
         """Granule centre velocities, (n, 2) array, m/s."""
-        return (
-            np.array([tuple(b.velocity) for b in self.scene.granule_bodies], dtype=float).reshape(
-                -1, 2
-            )
-            * u.VELOCITY
-        )
+        return self._granules().velocities()
 
     def granule_angular_velocities(self) -> FloatArray:
         """Granule angular velocities, (n,) array, rad/s."""
-        return (
-            np.array([b.angular_velocity for b in self.scene.granule_bodies], dtype=float)
-            * u.ANGULAR_VELOCITY
-        )
+        return self._granules().angular_velocities()
 
     def rotor_angle(self) -> float:
         """Rotor angle, rad (ω·t at constant ω)."""

@@ -1,4 +1,5 @@
-"""Bulk, checked reads of the granules' state through ``pymunk.batch`` (the one place it is used).
+"""Bulk, checked reads of the granules' state, and the one bulk write of their velocities, through
+``pymunk.batch`` (the one place it is used).
 
 Reading ``body.position`` for every granule in a Python loop costs about a microsecond per
 attribute; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C
@@ -22,25 +23,37 @@ nowhere else, with these properties:
   (position, angle, velocity, angular velocity); otherwise :class:`RuntimeError`. Building a
   reader also compares one read against the bodies' own properties, so a change of the
   experimental layout in a future Pymunk fails loudly instead of returning shifted numbers.
-* **Read-only.** ``pymunk.batch.set_space_bodies`` writes to every body (kinematic rotor and
-  static bodies included) and does not check the buffer length (a short buffer wrote NaN); it
-  is deliberately not exposed.
+* **Writing is velocities only, through** :class:`GranuleWriter`. ``pymunk.batch.
+  set_space_bodies`` writes to *every* body (kinematic rotor, hammers, static bodies included),
+  in the order of the body walk, and does not check the buffer length (a short buffer wrote
+  NaN). The writer therefore never writes from a buffer of its own making: immediately before
+  each write it reads every body's velocity and id into the batch buffer (one C pass), checks
+  the ids and the buffer size as for a read, replaces only the granule rows and writes that
+  same buffer back, so every other body gets back the bits it holds. Only ``VELOCITY`` is
+  written (positions are not: Chipmunk returns a position through the body's transform, which
+  is not guaranteed to reproduce the stored bits for a body with an offset centre of gravity).
+  Building a writer checks, once, that a write lands in the granule rows the reader found and
+  nowhere else (a marked write, read back per body, then undone).
 
 Values are copies (the batch buffer is reused), converted to SI by one multiplication by the
 unit of :mod:`perga.engine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
-gives. Rows are in the spec's granule order.
+gives. Rows are in the spec's granule order. :class:`GranuleWriter` works in Chipmunk's
+internal units on both sides (its only client, :mod:`perga.engine.effects`, computes in them).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
 from perga.engine import units as u
-from perga.engine.scene import Scene
+
+if TYPE_CHECKING:  # scene.py imports effects.py, which imports this module
+    from perga.engine.scene import Scene
 
 FloatArray = NDArray[np.float64]
 _F = pb.BodyFields
@@ -137,6 +150,11 @@ class GranuleReader:
             return [np.zeros((0, c.stop - c.start)) for c in columns.values()]
         width = sum(c.stop - c.start for c in columns.values())
         ids, floats = self._fetch(fields | _F.BODY_ID, width)
+        table = floats.reshape(ids.size, width)[self._granule_rows(ids)]  # fancy indexing: a copy
+        return [table[:, c] for c in columns.values()]
+
+    def _granule_rows(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
+        """The granules' rows in a batch read whose id column is ``ids`` (cached, checked)."""
         rows = self._rows
         if (
             rows.size != self._ids.size
@@ -144,13 +162,16 @@ class GranuleReader:
             or not (np.array_equal(ids[rows], self._ids))
         ):
             rows = self._rows = self._locate(ids)
-        table = floats.reshape(ids.size, width)[rows]  # fancy indexing: a copy
-        return [table[:, c] for c in columns.values()]
+        return rows
 
-    def _fetch(self, fields: pb.BodyFields, width: int) -> tuple[NDArray[np.uintp], FloatArray]:
-        """One batch read of ``fields`` (must include BODY_ID) with its buffer sizes checked.
-        The returned arrays are views of the reused buffer: valid until the next fetch."""
-        buffer = self._buffer
+    def _fetch(
+        self, fields: pb.BodyFields, width: int, buffer: pb.Buffer | None = None
+    ) -> tuple[NDArray[np.uintp], FloatArray]:
+        """One batch read of ``fields`` (must include BODY_ID) into ``buffer`` (default: the
+        reader's) with its buffer sizes checked. The returned arrays are views of the reused
+        buffer, valid until its next fetch; the float view is writable."""
+        if buffer is None:
+            buffer = self._buffer
         buffer.clear()
         pb.get_space_bodies(self._space, fields, buffer)
         ids = np.frombuffer(buffer.int_buf(), dtype=np.uintp)
@@ -191,6 +212,83 @@ class GranuleReader:
                     f"pymunk.batch layout check failed for granule {i}: read {got}, the body "
                     f"holds {expected} (position, angle, velocity, angular velocity)"
                 )
+
+
+class GranuleWriter(GranuleReader):
+    """A :class:`GranuleReader` that can also set all granules' velocities in one batch write.
+
+    Both :meth:`read_internal` and :meth:`write_internal_velocities` work in Chipmunk's internal
+    units (mm/ms, mm). A write reads every body's velocity first and writes those bits back to
+    every body but the granules (module docstring), so it is safe at any time between steps;
+    it is not meant for use inside ``space.step`` callbacks.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        super().__init__(scene)
+        self._write_buffer = pb.Buffer()  # only ever filled by get_space_bodies
+        if self._bodies:
+            self._verify_write()
+
+    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        """Granule velocities (n, 2), internal units, and their positions (n, 2) if asked for
+        (else None), from one batch pass. Fresh arrays."""
+        if positions:
+            p, v = self._read(_F.POSITION | _F.VELOCITY)
+            return v, p
+        (v,) = self._read(_F.VELOCITY)
+        return v, None
+
+    def write_internal_velocities(self, velocities: FloatArray) -> None:
+        """Set every granule's velocity (rows in spec order, (n, 2), internal units, finite);
+        every other body keeps its velocity bit for bit."""
+        new = np.asarray(velocities, dtype=np.float64)
+        if new.shape != (len(self._bodies), 2):
+            raise ValueError(
+                f"expected granule velocities of shape ({len(self._bodies)}, 2), got {new.shape}"
+            )
+        if not np.isfinite(new).all():
+            bad = np.flatnonzero(~np.isfinite(new).all(axis=1))
+            raise ValueError(f"non-finite velocities for granules {bad[:10].tolist()}")
+        if not self._bodies:
+            return
+        buffer = self._write_buffer
+        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+        floats.reshape(ids.size, 2)[self._granule_rows(ids)] = new
+        # the buffer holds exactly 2 floats per body in the walk's order, read just now
+        pb.set_space_bodies(self._space, _F.VELOCITY, buffer)
+
+    def _verify_write(self) -> None:
+        """Write marked velocities to the first and last granule, check that exactly those
+        bodies changed (per-body getters for them, a batch read for all), then undo it."""
+        buffer = self._write_buffer
+        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+        before_ids, before = ids.copy(), floats.reshape(-1, 2).copy()
+        (original,) = self._read(_F.VELOCITY)
+        marked = original.copy()
+        ends = sorted({0, len(self._bodies) - 1})
+        for k, i in enumerate(ends):
+            marked[i] = original[i] + (1.0 + k, -2.0 - k)
+        try:
+            self.write_internal_velocities(marked)
+            ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+            expected = before.copy()
+            rows = self._granule_rows(before_ids)
+            expected[rows[ends]] = marked[ends]
+            per_body = [tuple(self._bodies[i].velocity) for i in ends]
+            if (
+                not np.array_equal(ids, before_ids)
+                or not np.array_equal(floats.reshape(-1, 2), expected)
+                or per_body != [tuple(marked[i]) for i in ends]
+            ):
+                raise RuntimeError(
+                    "pymunk.batch.set_space_bodies check failed: a marked write of granules "
+                    f"{ends} did not land in their rows only (the experimental batch layout "
+                    "has changed)"
+                )
+        finally:
+            self.write_internal_velocities(original)
+        if [tuple(self._bodies[i].velocity) for i in ends] != [tuple(original[i]) for i in ends]:
+            raise RuntimeError("pymunk.batch.set_space_bodies check failed: undo did not restore")
 
 
 def granule_state(scene: Scene) -> GranuleState:
