@@ -55,6 +55,13 @@ def test_free_two_body_impact(m: float, M: float, e: float) -> None:
     assert impact.normal_velocity_before == pytest.approx(-V, rel=RTOL_IMPULSE)
     assert impact.normal_velocity_after == pytest.approx(e * V, rel=RTOL_IMPULSE, abs=1e-12)
     assert impact.normal_impulse == pytest.approx(exact.impulse, rel=RTOL_IMPULSE)
+    # the energy columns of the impacts table, against the same closed form; a central impact
+    # has no tangential velocity (absolute 1e-12 m/s: round-off of a 20 m/s normal)
+    assert impact.tangential_velocity_before == pytest.approx(0.0, abs=1e-12)
+    assert impact.tangential_velocity_after == pytest.approx(0.0, abs=1e-12)
+    assert impact.granule_energy_gain == pytest.approx(exact.granule_energy_gain, rel=RTOL_IMPULSE)
+    assert impact.dissipated == pytest.approx(exact.dissipated, rel=RTOL_IMPULSE, abs=1e-15)
+    assert impact.hammer_energy_before == pytest.approx(0.5 * M * V**2, rel=RTOL_IMPULSE)
 
 
 def test_restitution_is_the_pairs_not_the_product() -> None:

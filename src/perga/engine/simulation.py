@@ -54,9 +54,13 @@ class Impact:
 
     time: s (end of the step in which the contact began); granule, hammer: indices in the
     spec; normal_velocity_before/after: the granule's velocity relative to the hammer's
-    material point at the contact, along the hammer's outward normal (m/s; < 0 approaching,
-    > 0 separating); normal_impulse: impulse on the granule along that normal, N·s (>= 0);
-    point: contact point, m; normal: the hammer's outward unit normal.
+    material point at the contact, along the hammer's outward normal n (m/s; < 0 approaching,
+    > 0 separating); tangential_velocity_before/after: the same along t = n turned +90° (m/s);
+    normal_impulse: impulse on the granule along n, N·s (>= 0); point: contact point, m;
+    normal: n; granule_energy_gain: change of the granule's kinetic energy (translation and
+    spin) over the step, J; dissipated: energy lost in this contact, −J·v̄_rel with v̄_rel the
+    mean of the relative contact velocity before and after (exact for one impulse), J;
+    hammer_energy_before: the hammer's kinetic energy ½Mv_c² + ½I_cΩ² before the step, J.
     """
 
     time: float
@@ -64,21 +68,32 @@ class Impact:
     hammer: int
     normal_velocity_before: float
     normal_velocity_after: float
+    tangential_velocity_before: float
+    tangential_velocity_after: float
     normal_impulse: float
     point: tuple[float, float]
     normal: tuple[float, float]
+    granule_energy_gain: float
+    dissipated: float
+    hammer_energy_before: float
 
 
-def _contact(arbiter: pymunk.Arbiter) -> tuple[float, pymunk.Vec2d, pymunk.Vec2d]:
-    """Normal relative velocity (internal units), approach convention of :class:`Impact`, the
-    contact point and the hammer's outward normal. Shapes are ordered (granule, hammer)."""
+def _contact(arbiter: pymunk.Arbiter) -> tuple[pymunk.Vec2d, pymunk.Vec2d, pymunk.Vec2d]:
+    """Relative velocity granule − hammer at the contact point (internal units), the point and
+    the hammer's outward normal. Shapes are ordered (granule, hammer)."""
     granule_shape, hammer_shape = arbiter.shapes
     outward = -arbiter.normal  # arbiter.normal points from the granule to the hammer
     points = arbiter.contact_point_set.points
     p = (points[0].point_a + points[0].point_b) * 0.5
     v_g = granule_shape.body.velocity_at_world_point(p)
     v_h = hammer_shape.body.velocity_at_world_point(p)
-    return (v_g - v_h).dot(outward), p, outward
+    return v_g - v_h, p, outward
+
+
+def _granule_energy(body: pymunk.Body) -> float:
+    """Kinetic energy of a granule body, internal units (a sliding point has moment inf)."""
+    spin = 0.0 if math.isinf(body.moment) else 0.5 * body.moment * body.angular_velocity**2
+    return 0.5 * body.mass * body.velocity.length_squared + spin
 
 
 class ImpactRecorder:
@@ -87,8 +102,9 @@ class ImpactRecorder:
     def __init__(self, scene: Scene) -> None:
         self.impacts: list[Impact] = []
         self.time = 0.0
+        self._scene = scene
         self._owner = scene.shape_owner
-        self._pending: dict[tuple[int, int], float] = {}
+        self._pending: dict[tuple[int, int], tuple[pymunk.Vec2d, float, float]] = {}
         scene.on_granule_hammer(
             begin=self._begin, post_solve=self._post_solve, separate=self._separate
         )
@@ -97,27 +113,53 @@ class ImpactRecorder:
         granule_shape, hammer_shape = arbiter.shapes
         return self._owner[granule_shape][1], self._owner[hammer_shape][1]
 
+    def _hammer_energy(self, index: int) -> float:
+        """½Mv_c² + ½I_cΩ² of hammer ``index`` (internal units), welded ones included."""
+        spec = self._scene.spec.hammers[index]
+        body, shape = self._scene.hammer_bodies[index], self._scene.hammer_shapes[index]
+        centre = (
+            _welded_com(spec, shape)
+            if body is self._scene.rotor
+            else body.local_to_world(body.center_of_gravity)
+        )
+        mass = u.to_internal(spec.mass, u.MASS)
+        moment = u.to_internal(spec.moment_about_centre, u.MOMENT)
+        v = body.velocity_at_world_point(centre)
+        return 0.5 * mass * v.length_squared + 0.5 * moment * body.angular_velocity**2
+
     def _begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-        self._pending[self._key(arbiter)] = _contact(arbiter)[0]
+        key = self._key(arbiter)
+        relative, _, _ = _contact(arbiter)
+        granule_energy = _granule_energy(arbiter.shapes[0].body)
+        self._pending[key] = (relative, granule_energy, self._hammer_energy(key[1]))
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         key = self._key(arbiter)
-        before = self._pending.pop(key, None)
-        if before is None:
+        pending = self._pending.pop(key, None)
+        if pending is None:
             return
-        after, point, outward = _contact(arbiter)
+        before, granule_energy, hammer_energy = pending
+        after, point, n = _contact(arbiter)
+        t = n.perpendicular()
         # measured: total_impulse is the impulse on the first shape's body (the granule)
-        impulse = arbiter.total_impulse.dot(outward)
+        impulse = arbiter.total_impulse
+        joule = u.to_si(1.0, u.ENERGY)
         self.impacts.append(
             Impact(
                 time=self.time,
                 granule=key[0],
                 hammer=key[1],
-                normal_velocity_before=u.to_si(before, u.VELOCITY),
-                normal_velocity_after=u.to_si(after, u.VELOCITY),
-                normal_impulse=u.to_si(impulse, u.IMPULSE),
+                normal_velocity_before=u.to_si(before.dot(n), u.VELOCITY),
+                normal_velocity_after=u.to_si(after.dot(n), u.VELOCITY),
+                tangential_velocity_before=u.to_si(before.dot(t), u.VELOCITY),
+                tangential_velocity_after=u.to_si(after.dot(t), u.VELOCITY),
+                normal_impulse=u.to_si(impulse.dot(n), u.IMPULSE),
                 point=u.vec_to_si(tuple(point), u.LENGTH),
-                normal=(outward.x, outward.y),
+                normal=(n.x, n.y),
+                granule_energy_gain=(_granule_energy(arbiter.shapes[0].body) - granule_energy)
+                * joule,
+                dissipated=-impulse.dot((before + after) * 0.5) * joule,
+                hammer_energy_before=hammer_energy * joule,
             )
         )
 

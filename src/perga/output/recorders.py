@@ -7,12 +7,13 @@ Each recorder owns one table; ``record(sim)`` appends a frame. Impacts are writt
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 
 from perga.engine import units as u
-from perga.engine.simulation import Simulation
+from perga.engine.simulation import Impact, Simulation
 from perga.output.tables import Table
 
 
@@ -77,21 +78,22 @@ class HammerRecorder:
         self.table.write(rows)
 
 
-class ImpactRecorder:
-    """impacts.csv: every granule-hammer impact as it happens (see engine.simulation.Impact)."""
+def _impact_columns() -> tuple[str, ...]:
+    """Impact's fields, its two vectors split into components (point -> x, y; normal -> nx, ny)."""
+    split = {"point": ("x", "y"), "normal": ("nx", "ny")}
+    return tuple(c for f in fields(Impact) for c in split.get(f.name, (f.name,)))
 
-    columns = (
-        "time",
-        "granule",
-        "hammer",
-        "normal_velocity_before",
-        "normal_velocity_after",
-        "normal_impulse",
-        "x",
-        "y",
-        "nx",
-        "ny",
-    )
+
+def _impact_row(impact: Impact) -> tuple[object, ...]:
+    values = (getattr(impact, f.name) for f in fields(Impact))
+    return tuple(c for v in values for c in (v if isinstance(v, tuple) else (v,)))
+
+
+class ImpactRecorder:
+    """impacts.csv: every granule-hammer impact as it happens, one column per field of
+    :class:`~perga.engine.simulation.Impact` (SI)."""
+
+    columns = _impact_columns()
 
     def __init__(self, directory: Path) -> None:
         self.table = Table(directory / "impacts.csv", self.columns)
@@ -100,19 +102,7 @@ class ImpactRecorder:
     def record(self, sim: Simulation) -> None:
         """Append the impacts recorded since the last call."""
         new = sim.impacts[self.written :]
-        self.table.write(
-            (
-                i.time,
-                i.granule,
-                i.hammer,
-                i.normal_velocity_before,
-                i.normal_velocity_after,
-                i.normal_impulse,
-                *i.point,
-                *i.normal,
-            )
-            for i in new
-        )
+        self.table.write(_impact_row(i) for i in new)
         self.written += len(new)
 
 
