@@ -25,7 +25,7 @@ X0, TIP, RADIUS = 0.05, 0.15, 0.002  # m
 # order in dt like the frictionless blade (test_blade.py):
 #   face friction 0.3, ω = 100:   2.5e-4 / 1.8e-4 at 1e-5 s, 1.5e-4 / 2.7e-4 at 5e-6 s
 #   rolling disc, ω = 100:        1.7e-4 / 4.4e-4 at 1e-5 s, 1.2e-4 / 2.5e-4 at 5e-6 s
-#   co-rotating floor, ω = 20:    8.5e-5 / 1.6e-4 at 1e-5 s, 5.0e-5 / 8.8e-5 at 5e-6 s
+#   co-rotating floor, ω = 20:    1.05e-4 / 1.3e-4 at 1e-5 s, 6.0e-5 / 7.4e-5 at 5e-6 s
 DT = 5e-6
 
 

@@ -1,7 +1,7 @@
 """Energy ledger: every term measured on its own, so that their balance is a real check.
 
 Per step Chipmunk changes each body's velocity by impulses (contacts, joints, motors) and kicks
-(gravity, the effects' velocity functions). For one body the exact change of kinetic energy
+(gravity, the effects' per-step kicks). For one body the exact change of kinetic energy
 over the step is Σ J·v̄ over those impulses, v̄ the mean of the velocities at the application
 point before and after the step. The ledger uses that identity term by term:
 

@@ -10,12 +10,14 @@ Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t
 2. Chipmunk advances every body's position and angle with its *current* velocity (the
    kinematic rotor turns by ω·dt, so its angle is ω·t exactly up to rounding).
 3. Collision detection at the new positions. New granule-hammer contacts call ``begin``: the
-   recorder stores the pre-impact normal relative velocity. Every contact calls ``pre_solve``,
-   which sets the material pair's exact restitution and friction.
+   recorder stores the pre-impact relative contact velocity and the granule's and hammer's
+   kinetic energies. Restitution and friction are the products of the shapes' values, which
+   reproduce the pair table (``scene.factor_pair_table``); only a pair the table cannot split
+   has a ``pre_solve`` that sets its exact values.
 4. Contacts and joints are pre-stepped (restitution target = e × current approach speed),
    gravity is added to the velocities, the impulse solver runs ``iterations`` times.
-5. ``post_solve``: on a pair's first step of contact the recorder stores the post-impact
-   normal relative velocity and the normal impulse.
+5. ``post_solve``: on a pair's first step of contact the recorder completes the
+   :class:`Impact` (post-impact velocities, impulse, energy gained and dissipated).
 6. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
 
 With ``track_energy`` an :class:`~perga.engine.energy.EnergyMeter` reads every body's
