@@ -24,7 +24,7 @@ from perga.case.schema import Case
 from perga.engine.from_case import scene_spec
 from perga.engine.scene import build_scene
 from perga.engine.simulation import Simulation
-from perga.output.recorders import RECORDERS, PhaseLock
+from perga.output.recorders import RECORDERS, PhaseLock, Recorder
 
 
 class RunStoppedError(Exception):
@@ -96,17 +96,22 @@ def run_case(
     shutil.copyfile(case_path, directory / "case.toml")
     summary = RunSummary(case=str(case_path))
     start = time.perf_counter()
-    recorders: list = []
+    recorders: list[Recorder] = []
     sim: Simulation | None = None
     try:
         spec = scene_spec(case)
-        sim = Simulation(build_scene(spec), record_impacts="impacts" in case.output.record)
+        record = case.output.record
+        sim = Simulation(
+            build_scene(spec),
+            record_impacts="impacts" in record,
+            track_energy="energy" in record,
+        )
         summary.dt, summary.granules, summary.hammers = (
             spec.dt,
             len(spec.granules),
             len(spec.hammers),
         )
-        recorders = [RECORDERS[name](directory) for name in case.output.record if name in RECORDERS]
+        recorders = [RECORDERS[name](directory) for name in record]
         frames = PhaseLock(case.output.every)
         n_steps = math.ceil(case.solver.duration / spec.dt - 1e-9)
         chamber = case.chamber
@@ -143,7 +148,11 @@ def run_case(
 
 
 def _finish(
-    summary: RunSummary, sim: Simulation | None, recorders: list, wall: float, directory: Path
+    summary: RunSummary,
+    sim: Simulation | None,
+    recorders: list[Recorder],
+    wall: float,
+    directory: Path,
 ) -> None:
     for recorder in recorders:
         recorder.table.close()
@@ -152,7 +161,7 @@ def _finish(
         summary.steps, summary.simulated_time = sim.steps, sim.time
         summary.steps_per_second = sim.steps / wall if wall > 0 else 0.0
         summary.impacts = len(sim.impacts)
-        if hasattr(sim, "energy"):
+        if sim.meter is not None:
             summary.energy = asdict(sim.energy())
             closure = summary.energy.get("closure", 0.0)
             if abs(closure) > 0.01:

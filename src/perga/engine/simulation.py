@@ -250,6 +250,10 @@ class Simulation:
         """Rotor angle, rad (ω·t at constant ω)."""
         return float(self.scene.rotor.angle)
 
+    def rotor_angular_velocity(self) -> float:
+        """Rotor angular velocity, rad/s (varies only with a driven rotor)."""
+        return float(self.scene.rotor.angular_velocity) * u.ANGULAR_VELOCITY
+
     def hammer_swing_angles(self) -> FloatArray:
         """α of each hammer: its axis angle relative to the radial line through the hinge on
         the turning rotor, rad (constant for welded hammers)."""

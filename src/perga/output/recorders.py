@@ -9,12 +9,21 @@ from __future__ import annotations
 import math
 from dataclasses import fields
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
-from perga.engine import units as u
 from perga.engine.simulation import Impact, Simulation
 from perga.output.tables import Table
+
+
+class Recorder(Protocol):
+    """What the runner needs of a recorder: its table (to close) and ``record(sim)``."""
+
+    table: Table
+
+    def record(self, sim: Simulation) -> None:
+        """Append what this recorder keeps at the simulation's current time."""
 
 
 class PhaseLock:
@@ -68,12 +77,10 @@ class HammerRecorder:
 
     def record(self, sim: Simulation) -> None:
         """Append one frame."""
-        scene, t = sim.scene, sim.time
+        t = sim.time
         alpha, v = sim.hammer_swing_angles(), sim.hammer_velocities()
         spin = sim.hammer_angular_velocities()
-        rows = [
-            (t, -1, sim.rotor_angle(), scene.rotor.angular_velocity * u.ANGULAR_VELOCITY, 0.0, 0.0)
-        ]
+        rows = [(t, -1, sim.rotor_angle(), sim.rotor_angular_velocity(), 0.0, 0.0)]
         rows += [(t, i, alpha[i], spin[i], v[i, 0], v[i, 1]) for i in range(len(alpha))]
         self.table.write(rows)
 
