@@ -13,6 +13,8 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import signal
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -83,6 +85,28 @@ def check_granules(sim: Simulation, chamber_radius: float, wall_thickness: float
         )
 
 
+class StopRequest:
+    """Ctrl-C as a flag checked between steps. A KeyboardInterrupt raised inside a Pymunk
+    callback is swallowed by cffi (the run would go on), so SIGINT only sets the flag and the
+    loop stops at the next step boundary. Installed only in the main thread."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: object = None
+
+    def __enter__(self) -> StopRequest:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, _signum: int, _frame: object) -> None:
+        self.requested = True
+
+    def __exit__(self, *_exc: object) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+
+
 Progress = Callable[[float, float, int], None]
 """progress(simulated time s, duration s, steps) — called now and then by :func:`run_case`."""
 
@@ -125,13 +149,16 @@ def run_case(
 
         frames.due(0.0)
         write_frame()
-        for _ in range(n_steps):
-            sim.step()
-            last = sim.steps == n_steps
-            if frames.due(sim.time) or last:
-                write_frame()
-            if progress and (sim.steps % report_every == 0 or last):
-                progress(sim.time, case.solver.duration, sim.steps)
+        with StopRequest() as stop:
+            for _ in range(n_steps):
+                sim.step()
+                if stop.requested:
+                    raise KeyboardInterrupt
+                last = sim.steps == n_steps
+                if frames.due(sim.time) or last:
+                    write_frame()
+                if progress and (sim.steps % report_every == 0 or last):
+                    progress(sim.time, case.solver.duration, sim.steps)
         summary.status = "completed"
     except KeyboardInterrupt:
         summary.status, summary.reason = "interrupted", "stopped by the user (Ctrl-C)"
