@@ -1,0 +1,35 @@
+"""Soft granules: spring-dashpot discs tuned to a restitution e, integrated by a numba kernel.
+
+* ``contacts``: the contact laws (linear, Hertz-Tsuji; Cundall-Strack tangential spring with
+  Coulomb cap; rolling resistance) as pure numba functions, and the parameter table;
+* ``neighbours``: cell list + Verlet half list with skin, history carried over rebuilds;
+* ``kernel``: pair and wall forces, symplectic Euler, ``advance`` (k steps inside numba);
+* ``granules``: ``SoftGranules``, the Python holder with ``step(n)`` and ``relax()``.
+"""
+
+from perga.soft.contacts import (
+    DEFAULT_KT_RATIO,
+    N_PARAMS,
+    contact_duration,
+    contact_law,
+    contact_parameters,
+    pair_table,
+    rolling_torque,
+    uniform_table,
+)
+from perga.soft.granules import DEFAULT_DT_FRACTION, SoftGranules, chamber, plane
+
+__all__ = [
+    "DEFAULT_DT_FRACTION",
+    "DEFAULT_KT_RATIO",
+    "N_PARAMS",
+    "SoftGranules",
+    "chamber",
+    "contact_duration",
+    "contact_law",
+    "contact_parameters",
+    "pair_table",
+    "plane",
+    "rolling_torque",
+    "uniform_table",
+]

@@ -1,0 +1,329 @@
+"""``SoftGranules``: the arrays and parameters of a soft-granule system, stepped by the kernel."""
+
+import math
+from collections.abc import Sequence
+
+import numba
+import numpy as np
+
+from perga.soft import kernel
+from perga.soft.contacts import (
+    N_PARAMS,
+    P_HERTZ,
+    P_KN,
+    P_KT,
+    contact_duration,
+)
+from perga.soft.neighbours import build, default_skin, empty_list
+
+DEFAULT_DT_FRACTION = 1.0 / 50.0
+"""Default step as a fraction of the shortest contact duration (MercuryDPM convention)."""
+
+
+def chamber(radius: float, centre: tuple[float, float] = (0.0, 0.0), mat: int = 0) -> np.ndarray:
+    """Wall row of a round chamber of inner radius ``radius`` (m); granules inside."""
+    return np.array([kernel.WALL_CHAMBER, centre[0], centre[1], radius, 0.0, mat], dtype=float)
+
+
+def plane(point: tuple[float, float], normal: tuple[float, float], mat: int = 0) -> np.ndarray:
+    """Wall row of a half-plane through ``point`` whose ``normal`` points into the domain."""
+    nx, ny = normal
+    norm = math.hypot(nx, ny)
+    if not norm > 0.0:
+        raise ValueError("normal must be non-zero")
+    return np.array([kernel.WALL_PLANE, point[0], point[1], nx / norm, ny / norm, mat], dtype=float)
+
+
+def _f64(a, shape) -> np.ndarray:
+    out = np.ascontiguousarray(np.array(a, dtype=np.float64))
+    if out.shape != shape:
+        raise ValueError(f"expected shape {shape}, got {out.shape}")
+    return out
+
+
+class SoftGranules:
+    """Soft discs with spring-dashpot contacts, integrated by ``perga.soft.kernel``.
+
+    x: positions (n, 2), m; r: radii (n,), m; m: masses (n,), kg; params: contact table
+    (n_mat, n_mat, N_PARAMS) from ``perga.soft.contacts``; v (n, 2) m/s and w (n,) rad/s
+    default to 0; mat (n,) defaults to 0; inertia defaults to the disc m r²/2; walls: rows from
+    ``chamber``/``plane``; gravity (2,), m/s²; dt: step, s (default ``dt_fraction`` times the
+    shortest contact duration, Hertz evaluated at approach speed v_max, m/s); skin: Verlet skin,
+    m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's).
+
+    The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
+    moving granules by hand so the neighbour list is rebuilt).
+    """
+
+    def __init__(
+        self,
+        x,
+        r,
+        m,
+        params: np.ndarray,
+        *,
+        v=None,
+        w=None,
+        mat=None,
+        inertia=None,
+        walls: Sequence[np.ndarray] | np.ndarray = (),
+        gravity: tuple[float, float] = (0.0, 0.0),
+        dt: float | None = None,
+        dt_fraction: float = DEFAULT_DT_FRACTION,
+        v_max: float = 30.0,
+        skin: float | None = None,
+        threads: int | None = None,
+    ) -> None:
+        self.x = _f64(x, np.shape(x))
+        n = self.x.shape[0]
+        if self.x.shape != (n, 2):
+            raise ValueError(f"x must have shape (n, 2), got {self.x.shape}")
+        self.r = _f64(r, (n,))
+        self.m = _f64(m, (n,))
+        if not (np.all(self.r > 0) and np.all(self.m > 0)):
+            raise ValueError("radii and masses must be > 0")
+        self.v = np.zeros((n, 2)) if v is None else _f64(v, (n, 2))
+        self.w = np.zeros(n) if w is None else _f64(w, (n,))
+        self.inertia = 0.5 * self.m * self.r**2 if inertia is None else _f64(inertia, (n,))
+        self.mat = (
+            np.zeros(n, np.int32)
+            if mat is None
+            else np.ascontiguousarray(np.asarray(mat, dtype=np.int32))
+        )
+        params = np.ascontiguousarray(np.asarray(params, dtype=np.float64))
+        if params.ndim != 3 or params.shape[0] != params.shape[1] or params.shape[2] != N_PARAMS:
+            raise ValueError(f"params must have shape (n_mat, n_mat, {N_PARAMS})")
+        if not np.allclose(params, params.transpose(1, 0, 2)):
+            raise ValueError("params must be symmetric in the material pair")
+        self.params = params
+        walls_arr = np.array(walls, dtype=float).reshape(-1, kernel.WALL_COLUMNS)
+        self.walls = np.ascontiguousarray(walls_arr)
+        used = np.concatenate([self.mat, self.walls[:, 5].astype(np.int32)])
+        if used.size and (used.min() < 0 or used.max() >= params.shape[0]):
+            raise ValueError("a material index is outside the parameter table")
+        self.wall_hist = np.zeros((n, self.walls.shape[0]))
+        self.gravity = _f64(gravity, (2,))
+        self.v_max = float(v_max)
+        self.t_c = self.shortest_contact_duration()
+        self.dt = float(dt) if dt is not None else dt_fraction * self.t_c
+        self.skin = default_skin(self.r) if skin is None else float(skin)
+        self.threads = numba.get_num_threads() if threads is None else int(threads)
+        self.f = np.zeros((n, 2))
+        self.tq = np.zeros(n)
+        self.a_prev = np.zeros((n, 3))
+        self._acc = kernel.new_accumulator(self.threads, n)
+        self.start, self.nbr, self.hist = empty_list(n)
+        self.x_ref = self.x.copy()
+        self._rebuild = True
+        self.time = 0.0
+        self.n_rebuilds = 0
+
+    @property
+    def n(self) -> int:
+        """Number of granules."""
+        return self.x.shape[0]
+
+    def shortest_contact_duration(self) -> float:
+        """Shortest head-on contact duration over the material pairs present, s.
+
+        Granule pairs use the two smallest masses of their materials (m_eff grows with both
+        masses), walls the smallest granule mass; Hertz at approach speed v_max.
+        """
+        if self.n == 0:
+            return math.inf
+        durations = []
+        mats = np.unique(self.mat)
+        m_min = {int(a): float(self.m[self.mat == a].min()) for a in mats}
+        for a in mats:
+            for b in mats:
+                if b < a:
+                    continue
+                ma, mb = m_min[int(a)], m_min[int(b)]
+                row = self.params[a, b]
+                durations.append(contact_duration(row, ma * mb / (ma + mb), self.v_max))
+            for s in range(self.walls.shape[0]):
+                row = self.params[a, int(self.walls[s, 5])]
+                durations.append(contact_duration(row, m_min[int(a)], self.v_max))
+        return min(durations)
+
+    def set_threads(self, threads: int) -> None:
+        """Use ``threads`` numba threads (force chunks) from the next step on."""
+        self.threads = max(int(threads), 1)
+        self._acc = kernel.new_accumulator(self.threads, self.n)
+
+    def invalidate(self) -> None:
+        """Force a neighbour-list rebuild at the next step (after editing x or r by hand)."""
+        self._rebuild = True
+
+    def step(self, n_steps: int = 1, *, drag: float = 0.0, v_cap: float = math.inf) -> None:
+        """Advance n_steps steps of dt inside the compiled kernel (threads as configured)."""
+        if n_steps <= 0:
+            return
+        previous = numba.get_num_threads()
+        numba.set_num_threads(self.threads)
+        try:
+            self.start, self.nbr, self.hist, rebuilt = kernel.advance(
+                int(n_steps),
+                self.x,
+                self.v,
+                self.w,
+                self.a_prev,
+                self.r,
+                self.m,
+                self.inertia,
+                self.mat,
+                self.params,
+                self.walls,
+                self.wall_hist,
+                self.gravity,
+                self.dt,
+                self.skin,
+                self.start,
+                self.nbr,
+                self.hist,
+                self.x_ref,
+                self._acc,
+                self.f,
+                self.tq,
+                float(drag),
+                float(v_cap),
+                self._rebuild,
+            )
+        finally:
+            numba.set_num_threads(previous)
+        self._rebuild = False
+        self.n_rebuilds += int(rebuilt)
+        self.time += n_steps * self.dt
+
+    # --- diagnostics (NumPy, not per step) -------------------------------------------------
+
+    def _pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, overlap, list entry) of the granule pairs in contact now."""
+        if self._rebuild:
+            self.start, self.nbr, self.hist = build(
+                self.x, self.r, self.skin, self.start, self.nbr, self.hist
+            )
+            self.x_ref[:] = self.x
+            self._rebuild = False
+        counts = np.diff(self.start)
+        i = np.repeat(np.arange(self.n), counts)
+        j = self.nbr
+        if j.size == 0:
+            e = np.empty(0, np.int64)
+            return e, e, np.empty(0), e
+        d = np.linalg.norm(self.x[i] - self.x[j], axis=1)
+        delta = self.r[i] + self.r[j] - d
+        k = np.flatnonzero(delta > 0)
+        return i[k], j[k], delta[k], k
+
+    def _walls_overlap(self) -> np.ndarray:
+        """Overlaps (n, n_walls) of the granules with the walls, m (≤ 0: no contact)."""
+        out = np.zeros((self.n, self.walls.shape[0]))
+        for s, (kind, a, b, c, d, _mat) in enumerate(self.walls):
+            if kind == kernel.WALL_CHAMBER:
+                out[:, s] = self.r + np.hypot(self.x[:, 0] - a, self.x[:, 1] - b) - c
+            else:
+                out[:, s] = self.r - ((self.x[:, 0] - a) * c + (self.x[:, 1] - b) * d)
+        return out
+
+    @staticmethod
+    def _spring_energy(rows: np.ndarray, delta: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        hertz = rows[:, P_HERTZ] != 0.0
+        kn = rows[:, P_KN]
+        normal = np.where(hertz, 0.4 * kn * delta**2.5, 0.5 * kn * delta**2)
+        kt = np.where(hertz, rows[:, P_KT] * np.sqrt(delta), rows[:, P_KT])
+        return normal + 0.5 * kt * xi**2
+
+    def contact_energy(self) -> float:
+        """Elastic energy stored in the normal and tangential springs of all contacts, J.
+
+        Normal: k δ²/2 (linear), 2 k δ^{5/2}/5 (Hertz); tangential: k_t ξ²/2.
+        """
+        i, j, delta, k = self._pairs()
+        total = self._spring_energy(
+            self.params[self.mat[i], self.mat[j]], delta, self.hist[k]
+        ).sum()
+        ov = self._walls_overlap()
+        for s in range(self.walls.shape[0]):
+            c = np.flatnonzero(ov[:, s] > 0)
+            rows = self.params[self.mat[c], int(self.walls[s, 5])]
+            total += self._spring_energy(rows, ov[c, s], self.wall_hist[c, s]).sum()
+        return float(total)
+
+    def kinetic_energy(self) -> float:
+        """Translational plus rotational kinetic energy, J."""
+        return float(
+            0.5 * np.sum(self.m * np.sum(self.v**2, axis=1))
+            + 0.5 * np.sum(self.inertia * self.w**2)
+        )
+
+    def potential_energy(self) -> float:
+        """Potential energy in the uniform gravity field, −Σ m g·x, J."""
+        return float(-np.sum(self.m * (self.x @ self.gravity)))
+
+    def energy(self) -> float:
+        """Kinetic + gravitational + elastic contact energy, J."""
+        return self.kinetic_energy() + self.potential_energy() + self.contact_energy()
+
+    def max_overlap(self) -> float:
+        """Largest overlap of any granule with a granule or wall, m (0 with no contact)."""
+        _, _, delta, _ = self._pairs()
+        ov = self._walls_overlap()
+        return float(max(delta.max(initial=0.0), ov.max(initial=0.0), 0.0))
+
+    def release_speed(self) -> float:
+        """Largest speed a single contact's stored normal energy could give, √(2E_c/m_eff), m/s."""
+        i, j, delta, _ = self._pairs()
+        rows = self.params[self.mat[i], self.mat[j]]
+        m_eff = self.m[i] * self.m[j] / (self.m[i] + self.m[j])
+        e = self._spring_energy(rows, delta, np.zeros_like(delta))
+        speeds = [np.sqrt(2.0 * e / m_eff)]
+        ov = self._walls_overlap()
+        for s in range(self.walls.shape[0]):
+            c = np.flatnonzero(ov[:, s] > 0)
+            rows = self.params[self.mat[c], int(self.walls[s, 5])]
+            e = self._spring_energy(rows, ov[c, s], np.zeros(c.size))
+            speeds.append(np.sqrt(2.0 * e / self.m[c]))
+        return float(max(s.max(initial=0.0) for s in speeds))
+
+    def relax(
+        self,
+        *,
+        v_release: float = 0.01,
+        v_cap: float | None = None,
+        drag: float | None = None,
+        block: int = 200,
+        max_steps: int = 200_000,
+    ) -> int:
+        """Remove initial overlaps gently before a run; returns the steps used.
+
+        Runs the normal kernel with a global drag (default π/t_c, about the contact's own ω_n)
+        and a speed cap (default 0.05 r_min/t_c: a granule moves at most 5 % of its radius per
+        contact duration), in blocks of ``block`` steps, until no contact stores more normal
+        energy than would launch its pair at v_release (m/s) and no granule moves faster than
+        v_release; then zeroes velocities, spins and tangential springs. Without it a densely
+        overlapping packing explodes (design §5: 485 m/s). Raises RuntimeError after max_steps.
+        """
+        drag = math.pi / self.t_c if drag is None else drag
+        v_cap = 0.05 * float(self.r.min()) / self.t_c if v_cap is None else v_cap
+        steps = 0
+        while True:
+            speed = float(np.sqrt(np.max(np.sum(self.v**2, axis=1), initial=0.0)))
+            if self.release_speed() <= v_release and speed <= v_release:
+                break
+            if steps >= max_steps:
+                raise RuntimeError(
+                    f"relax: overlaps not resolved after {steps} steps "
+                    f"(release speed {self.release_speed():.3g} m/s); the packing may be too dense"
+                )
+            self.step(block, drag=drag, v_cap=v_cap)
+            steps += block
+        self.v[:] = 0.0
+        self.w[:] = 0.0
+        self.hist[:] = 0.0
+        self.wall_hist[:] = 0.0
+        self.time = 0.0
+        return steps
+
+
+__all__ = ["DEFAULT_DT_FRACTION", "SoftGranules", "chamber", "plane"]
