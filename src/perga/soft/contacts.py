@@ -78,15 +78,22 @@ def touching(delta, ddelta, dt):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
-    """Normal and tangential force of one contact between materials a, b over one step.
+def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_eff, xi, dt):
+    """The soft contact law itself, from explicit coefficients (one row of the table, resolved).
 
-    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; delta:
-    overlap at the step's time (may be ≤ 0 just before first touch), m; ddelta: approach rate
-    dδ/dt, m/s; vt: tangential slip rate of A's contact point relative to B's along t, m/s;
-    m_eff: the contact's reduced mass, kg; xi: tangential spring elongation, m; dt: step, s.
-    Returns (fn, ft, xi_new): normal force on A along n (≥ 0 when clamped), N; tangential force
-    on A along t, N; elongation after this step, m.
+    The single implementation of the normal and tangential law shared by granule pairs, walls
+    (through ``contact_law``) and granule-polygon contacts (``perga.soft.polygons``, whose
+    stiffness depends on the granule's radius under Hertz and so cannot come from the table).
+    kn: normal stiffness, N/m (linear) or N/m^{3/2} (hertz != 0); damp: dimensionless damping D
+    (2ζ linear, α Hertz-Tsuji); clamp != 0: F_n ≥ 0 (end="force"); kt: tangential stiffness at
+    this overlap, N/m (the caller applies any √δ scaling); dampt: tangential damping ratio ζ_t;
+    mu: friction coefficient. delta, ddelta, vt, m_eff, xi, dt and the returned
+    (fn, ft, xi_new): as in ``contact_law``.
+
+    ddelta is the approach rate *at the force time t*: velocities of a kick-drift step are half a
+    step old when forces are evaluated, so callers extrapolate them (the kernel by
+    u = v + ½ dt a_prev, the polygon module by 1.5 δ̇_{n−1/2} − 0.5 δ̇_{n−3/2}); using the stale
+    rate biases e by O(dt).
 
     The dashpot enters as its exact impulse over the kick interval: ∫ c(δ) δ̇ dt =
     D√(k_n m_eff)[Φ(δ⁺) − Φ(δ⁻)] with δ± = max(0, δ ± ½ dt δ̇), Φ(δ) = δ (linear) or
@@ -95,29 +102,59 @@ def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
     switching the full c v0 on for a whole step, which made e depend on where first touch falls
     within a step (±1-2 % at e = 0.3, t_c/50).
     """
-    kn = params[a, b, P_KN]
     half = 0.5 * dt * ddelta
     hi = max(delta + half, 0.0)
     lo = max(delta - half, 0.0)
     d = max(delta, 0.0)
-    if params[a, b, P_HERTZ] != 0.0:
-        sd = math.sqrt(d)
+    if hertz != 0.0:
         dphi = 0.8 * (hi * math.sqrt(math.sqrt(hi)) - lo * math.sqrt(math.sqrt(lo)))
-        fn = kn * d * sd + params[a, b, P_DAMP] * math.sqrt(kn * m_eff) * dphi / dt
-        kt = params[a, b, P_KT] * sd
+        fn = kn * d * math.sqrt(d) + damp * math.sqrt(kn * m_eff) * dphi / dt
     else:
-        fn = kn * d + params[a, b, P_DAMP] * math.sqrt(kn * m_eff) * (hi - lo) / dt
-        kt = params[a, b, P_KT]
-    if fn < 0.0 and params[a, b, P_CLAMP] != 0.0:
+        fn = kn * d + damp * math.sqrt(kn * m_eff) * (hi - lo) / dt
+    if fn < 0.0 and clamp != 0.0:
         fn = 0.0
     xi = xi + vt * dt
-    ct = 2.0 * params[a, b, P_DAMPT] * math.sqrt(kt * m_eff)
+    ct = 2.0 * dampt * math.sqrt(kt * m_eff)
     ft = -kt * xi - ct * vt
-    cap = params[a, b, P_MU] * abs(fn)
+    cap = mu * abs(fn)
     if abs(ft) > cap:
         ft = math.copysign(cap, ft)
         xi = -(ft + ct * vt) / kt if kt > 0.0 else 0.0
     return fn, ft, xi
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
+    """Normal and tangential force of one contact between materials a, b over one step.
+
+    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; delta:
+    overlap at the step's time (may be ≤ 0 just before first touch), m; ddelta: approach rate
+    dδ/dt at that time, m/s; vt: tangential slip rate of A's contact point relative to B's
+    along t, m/s; m_eff: the contact's reduced mass, kg; xi: tangential spring elongation, m;
+    dt: step, s. Returns (fn, ft, xi_new): normal force on A along n (≥ 0 when clamped), N;
+    tangential force on A along t, N; elongation after this step, m.
+
+    Reads the table row and calls ``contact_force`` (the law and its time discretisation are
+    documented there); Hertz rows get the Mindlin-like k_t = P_KT·√δ.
+    """
+    kt = params[a, b, P_KT]
+    if params[a, b, P_HERTZ] != 0.0:
+        kt *= math.sqrt(max(delta, 0.0))
+    return contact_force(
+        params[a, b, P_KN],
+        params[a, b, P_DAMP],
+        params[a, b, P_HERTZ],
+        params[a, b, P_CLAMP],
+        kt,
+        params[a, b, P_DAMPT],
+        params[a, b, P_MU],
+        delta,
+        ddelta,
+        vt,
+        m_eff,
+        xi,
+        dt,
+    )
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)

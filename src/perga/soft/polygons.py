@@ -14,35 +14,34 @@ Contact geometry: the closest feature of the polygon (an edge or a corner) to th
 A centre outside the polygon gets the normal from the closest boundary point (along centre-corner
 at a corner); a centre inside gets the outward normal of the edge of deepest penetration (the
 largest signed distance), overlap δ = r − s. The force acts at the middle of the overlap,
-p = x − (r − δ/2) n.
+p = x − (r − δ⁺/2) n (the disc's surface point while δ ≤ 0), with the contact's effective mass
+m_eff = 1/(1/m_i + 1/m_p).
 
-Normal force, clamped at zero (the contact ends when the force returns to zero, ``end="force"``
-of ``perga.analytic.contact``), with m_eff = 1/(1/m_i + 1/m_p) of this contact:
+Contact law: ``perga.soft.contacts.contact_force``, the same law (and the same time
+discretisation) as granule pairs and walls, always clamped at zero (``end="force"``):
 
 * ``LINEAR``: F_n = max(0, k_n δ + 2ζ√(k_n m_eff) δ̇), ζ = ``damping_ratio(e, "force")``;
 * ``HERTZ``: F_n = max(0, k δ^{3/2} + α√(m_eff k) δ^{1/4} δ̇), k = k_n √r_i (k_n = (4/3) E*,
   Pa, with R_eff = r_i for a flat face), α = ``tsuji_alpha(e, "force")``.
 
-Time discretisation of the dashpot, for the symplectic Euler step (kick, then drift) the caller
-uses. Its velocities are half a step old when the forces are evaluated, and a contact begins at
-an arbitrary time inside a step; taken naively (δ̇ of the last half step, full dashpot force from
-the first step on) both shift e by O(dt): at dt = t_c/50, e = 0.3 came out 3.5 % low or 0.5 %
-low depending on where in the step the first touch fell, e = 0.7 0.8 % low. Two corrections:
-
-* onset: at the first step of a contact (δ > 0 now, not at the previous step) the dashpot term
-  is its exact mean over [t − τ, t + dt/2], τ = min(δ/δ̇, dt) the time since first touch (linear:
-  c δ̇ (τ + dt/2)/dt; Hertz: (4/5) η δ̇^{5/4} (τ + dt/2)^{5/4}/dt);
-* rate: afterwards δ̇ is extrapolated to the force time from the last two half-step rates,
-  1.5 δ̇_{n−1/2} − 0.5 δ̇_{n−3/2} (exact for a contact at rest, so static loads are unchanged).
-
-With both, e is within 0.2 % of its target for e in 0.3-0.9 at dt = t_c/50 (tests).
+A contact is evaluated whenever ``contacts.touching`` (δ > 0 somewhere in the kick interval
+[t − dt/2, t + dt/2], so possibly half a step before first touch), and the dashpot enters as its
+exact impulse over the overlapping part of that interval (see ``contact_force``). The approach
+rate handed to the law is extrapolated to the force time: the caller's velocities are half a
+step old (kick, then drift), and this module does not know the accelerations of the granules or
+of the polygons (the granule kernel extrapolates u = v + ½ dt a_prev), so it extrapolates δ̇
+from the last two half-step rates instead, 1.5 δ̇_{n−1/2} − 0.5 δ̇_{n−3/2} (δ̇_{n−1/2} unchanged
+at the first evaluation of a contact, before any contact force acted; exact for a contact at
+rest). For a normal approach this equals δ̇ + ½ dt δ̈ of the previous step, i.e. the kernel's
+extrapolation. The tangential slip rate is not extrapolated.
 
 Tangential force: Cundall-Strack spring F_t = −k_t ξ on the accumulated tangential displacement ξ
 (a scalar per (granule, polygon) pair in 2-D, along t = (−n_y, n_x)), capped at f·F_n (ξ is
-rescaled so that k_t|ξ| = f F_n while sliding). History per (granule, polygon) pair, an array
-(n, n_poly, 3) owned by the caller (start from zeros): [ξ (m), 1.0 if overlapping at the last
-call else 0.0, δ̇ of the last call (m/s)]; all three are reset to zero whenever the pair does not
-overlap. The caller must permute its rows with the granules if it reorders them.
+rescaled so that k_t|ξ| = f F_n while sliding); k_t constant (also for ``HERTZ``), no tangential
+damping. History per (granule, polygon) pair, an array (n, n_poly, 3) owned by the caller (start
+from zeros): [ξ (m), 1.0 if the contact was evaluated at the last call else 0.0, δ̇ of the last
+call (m/s, not extrapolated)]; all three are reset to zero whenever the pair is not touching.
+The caller must permute its rows with the granules if it reorders them.
 
 Forces and torques on the granules are accumulated into the caller's ``f`` (n, 2) and ``tq`` (n,);
 the equal and opposite force and its torque about each polygon's centre of mass are accumulated
@@ -50,14 +49,16 @@ into ``PolygonSet.force`` (n_poly, 2) and ``PolygonSet.torque`` (n_poly,), to be
 Pymunk bodies. Both sides use the same force at the same point, so linear and angular momentum
 are conserved to round-off.
 
-Broad phase: a granule is skipped for a polygon when its centre is farther than r_i from the
-polygon's bounding circle (centre at the vertex mean). Granules are processed in a fixed number of
-chunks in parallel (numba ``prange``); per-polygon sums are reduced chunk by chunk in a fixed
-order, so the result does not depend on the number of threads.
+Broad phase: a granule is skipped for a polygon when its centre is farther than r_i plus half a
+step's largest possible approach from the polygon's bounding circle (centre at the vertex mean).
+Granules are processed in a fixed number of chunks in parallel (numba ``prange``); per-polygon
+sums are reduced chunk by chunk in a fixed order, so the result does not depend on the number of
+threads.
 
 Limits: a disc whose centre crosses the middle of a thin polygon in one step is pushed out of the
 other side (tunnelling: see ``perga.analytic.contact.tunnelling_time_step``); rolling resistance is
-not modelled; k_t is constant (no Mindlin δ^{1/2} scaling for ``HERTZ``).
+not modelled; k_t is constant (no Mindlin δ^{1/2} scaling for ``HERTZ``, unlike the table rows
+of ``contact_law``).
 """
 
 import math
@@ -67,6 +68,7 @@ import numba as nb
 import numpy as np
 
 from perga.analytic.contact import damping_ratio, tsuji_alpha
+from perga.soft.contacts import contact_force, touching
 
 FREE = 0
 """Polygon kind: free rigid body (mass M and moment I_c about its centre of mass)."""
@@ -326,6 +328,8 @@ def _polygon_contacts(
     n_poly = com.shape[0]
     # Bounding circles: centre at the vertex mean, radius to the farthest vertex.
     bound = np.empty((n_poly, 3))
+    off = np.empty(n_poly)  # |centre of mass - bounding centre|
+    pspeed = np.empty(n_poly)
     for k in range(n_poly):
         lo, hi = start[k], start[k + 1]
         bx = 0.0
@@ -341,6 +345,11 @@ def _polygon_contacts(
         bound[k, 0] = bx
         bound[k, 1] = by
         bound[k, 2] = math.sqrt(rr)
+        off[k] = math.sqrt((com[k, 0] - bx) ** 2 + (com[k, 1] - by) ** 2)
+        pspeed[k] = math.sqrt(pvel[k, 0] ** 2 + pvel[k, 1] ** 2)
+    speed = np.empty(n)
+    for i in range(n):
+        speed[i] = math.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2)
     n_chunks = min(N_CHUNKS, max(n, 1))
     part = np.zeros((n_chunks, n_poly, 3))
     counts = np.zeros(n_chunks, dtype=np.int64)
@@ -355,7 +364,14 @@ def _polygon_contacts(
                 dx = xi - bound[k, 0]
                 dy = yi - bound[k, 1]
                 reach = bound[k, 2] + ri
-                if dx * dx + dy * dy >= reach * reach:
+                d2 = dx * dx + dy * dy
+                # Skip when even the fastest approach cannot make it touch within the step:
+                # |rate| <= 1.5 |v_i - v_p| + 0.5 |last rate|, |v_p| <= |v_c| + |w| |p - c|.
+                if d2 >= reach * reach and not (
+                    math.sqrt(d2) - reach < 0.5 * dt * (1.5 * (
+                        speed[i] + pspeed[k] + abs(pomega[k]) * (math.sqrt(d2) + ri + off[k])
+                    ) + 0.5 * abs(hist[i, k, 2]))
+                ):  # fmt: skip
                     if hist[i, k, 1] != 0.0:  # forget a contact that has ended
                         hist[i, k, 0] = 0.0
                         hist[i, k, 1] = 0.0
@@ -363,15 +379,9 @@ def _polygon_contacts(
                     continue
                 d, nx, ny = _closest_feature(xi, yi, verts, start[k], start[k + 1])
                 delta = ri - d
-                if delta <= 0.0:
-                    if hist[i, k, 1] != 0.0:  # forget a contact that has ended
-                        hist[i, k, 0] = 0.0
-                        hist[i, k, 1] = 0.0
-                        hist[i, k, 2] = 0.0
-                    continue
-                counts[c] += 1
-                # Contact point: middle of the overlap; tangent t = (-ny, nx).
-                arm = ri - 0.5 * delta
+                # Contact point: middle of the overlap (the surface point before first touch);
+                # tangent t = (-ny, nx).
+                arm = ri - 0.5 * max(delta, 0.0)
                 px = xi - arm * nx
                 py = yi - arm * ny
                 tx = -ny
@@ -387,6 +397,18 @@ def _polygon_contacts(
                 vry = vdy - vpy
                 delta_dot = -(vrx * nx + vry * ny)
                 vt = vrx * tx + vry * ty
+                # delta_dot is the rate of the last half step; extrapolate it to the force time
+                # from the previous one (no previous one at first touch: no contact force yet).
+                rate = delta_dot
+                if hist[i, k, 1] != 0.0:
+                    rate = 1.5 * delta_dot - 0.5 * hist[i, k, 2]
+                if not touching(delta, rate, dt):
+                    if hist[i, k, 1] != 0.0:  # forget a contact that has ended
+                        hist[i, k, 0] = 0.0
+                        hist[i, k, 1] = 0.0
+                        hist[i, k, 2] = 0.0
+                    continue
+                counts[c] += 1
                 # Effective mass of this contact.
                 kd = kind[k]
                 if kd == FREE:
@@ -400,45 +422,21 @@ def _polygon_contacts(
                 m_eff = 1.0 / (1.0 / m[i] + inv_mp)
                 a = mat[i]
                 b = pmat[k]
-                kn = k_n[a, b]
-                # Onset: the contact began tau = delta/delta_dot before this force evaluation,
-                # which stands for [t - dt/2, t + dt/2]: the dashpot, whose force jumps at first
-                # touch, gets its exact mean over [t - tau, t + dt/2] instead of its value at t.
-                onset = hist[i, k, 1] == 0.0 and delta_dot > 0.0
-                tau = min(delta / delta_dot, dt) if onset else 0.0
-                # delta_dot is the rate of the last half step; extrapolate it to t from the
-                # previous one (removes the O(dt) bias of e; exact at rest).
-                rate = delta_dot
-                if hist[i, k, 1] != 0.0:
-                    rate = 1.5 * delta_dot - 0.5 * hist[i, k, 2]
-                hist[i, k, 2] = delta_dot
                 if law[a, b] == LINEAR:
-                    c_n = 2.0 * damping[a, b] * math.sqrt(kn * m_eff)
-                    if onset:
-                        fn = kn * delta + c_n * delta_dot * (tau + 0.5 * dt) / dt
-                    else:
-                        fn = kn * delta + c_n * rate
+                    kn = k_n[a, b]
+                    damp = 2.0 * damping[a, b]
+                    hertz = 0.0
                 else:
-                    kh = kn * math.sqrt(ri)
-                    sq = math.sqrt(delta)
-                    eta = damping[a, b] * math.sqrt(m_eff * kh)
-                    if onset:
-                        # mean of eta (delta_dot s)^{1/4} delta_dot over s in [0, tau + dt/2]
-                        s2 = tau + 0.5 * dt
-                        fn = kh * delta * sq + eta * delta_dot**1.25 * 0.8 * s2**1.25 / dt
-                    else:
-                        fn = kh * delta * sq + eta * math.sqrt(sq) * rate
-                fn = max(fn, 0.0)
-                hist[i, k, 1] = 1.0
-                # Cundall-Strack tangential spring with Coulomb cap.
-                kt = k_t[a, b]
-                xi_t = hist[i, k, 0] + vt * dt
-                ft = -kt * xi_t
-                cap = friction[a, b] * fn
-                if abs(ft) > cap:
-                    ft = cap if ft > 0.0 else -cap
-                    xi_t = -ft / kt
+                    kn = k_n[a, b] * math.sqrt(ri)
+                    damp = damping[a, b]
+                    hertz = 1.0
+                fn, ft, xi_t = contact_force(
+                    kn, damp, hertz, 1.0, k_t[a, b], 0.0, friction[a, b],
+                    delta, rate, vt, m_eff, hist[i, k, 0], dt,
+                )  # fmt: skip
                 hist[i, k, 0] = xi_t
+                hist[i, k, 1] = 1.0
+                hist[i, k, 2] = delta_dot
                 fx = fn * nx + ft * tx
                 fy = fn * ny + ft * ty
                 f[i, 0] += fx
@@ -471,7 +469,10 @@ def polygon_contacts(
     f: np.ndarray,
     tq: np.ndarray,
 ) -> int:
-    """Accumulate granule-polygon contact forces; return the number of contacts.
+    """Accumulate granule-polygon contact forces; return the number of contacts evaluated.
+
+    A contact counts while ``touching`` (module doc): from up to half a step before first touch
+    to the step after the force has returned to zero.
 
     Granules: x, v (n, 2), w, r, m (n,), mat (n,) int32 (row of ``table``). dt: time step, s
     (advances the tangential springs). history (n, n_poly, 3): contact history (module doc),
