@@ -88,7 +88,8 @@ def _check_restitution(e: float, end: End) -> None:
     if end == "force" and not math.log(e) > -2.0:
         raise ValueError(
             f"e must be in (exp(-2) = {FORCE_END_MIN_RESTITUTION:.6f}, 1] for end='force' "
-            f"(got {e}); a lower e needs an overdamped contact (zeta >= 1)"
+            f"(got {e}); a lower e needs an overdamped contact (zeta >= 1); end='overlap' "
+            "reaches any e > 0"
         )
 
 

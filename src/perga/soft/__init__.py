@@ -3,7 +3,10 @@
 * ``contacts``: the contact laws (linear, Hertz-Tsuji; Cundall-Strack tangential spring with
   Coulomb cap; rolling resistance) as pure numba functions, and the parameter table;
 * ``neighbours``: cell list + Verlet half list with skin, history carried over rebuilds;
-* ``kernel``: pair and wall forces, symplectic Euler, ``advance`` (k steps inside numba);
+* ``kernel``: pair, wall and polygon forces, symplectic Euler, ``advance`` (k steps inside
+  numba), the energy each contact law dissipated;
+* ``polygons``: discs against convex rigid polygons (hammers), moved rigidly within a call,
+  with mean loads and per-contact impact history;
 * ``granules``: ``SoftGranules``, the Python holder with ``step(n)`` and ``relax()``.
 """
 

@@ -8,7 +8,8 @@ the approach rate ``ddelta = dδ/dt = −(v_A,c − v_B,c)·n`` and the tangenti
 x_A has its contact point at x_A − r n, whose velocity is v_A − r ω_A t (2-D: ω ẑ × (−r n)).
 
 ``contact_law`` returns the normal force ``fn`` (on A along +n, repulsive > 0), the tangential
-force ``ft`` (on A along +t) and the new tangential history; the caller applies
+force ``ft`` (on A along +t), the new tangential history and the energy the contact dissipated
+over the step (``contact_force`` defines it); the caller applies
 F = fn n + ft t to A at its contact point (torque −r_A ft on a disc), −F to B (torque −r_B ft on a
 disc, ``r_B·(n × −F)``), and, if μ_r > 0, ``rolling_torque`` (+M on A, −M on B). In 2-D the
 tangential spring history is a scalar ξ along the current tangent: storing it as a scalar *is*
@@ -88,7 +89,7 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     (2ζ linear, α Hertz-Tsuji); clamp != 0: F_n ≥ 0 (end="force"); kt: tangential stiffness at
     this overlap, N/m (the caller applies any √δ scaling); dampt: tangential damping ratio ζ_t;
     mu: friction coefficient. delta, ddelta, vt, m_eff, xi, dt and the returned
-    (fn, ft, xi_new): as in ``contact_law``.
+    (fn, ft, xi_new, dissipated): as in ``contact_law``.
 
     ddelta is the approach rate *at the force time t*: velocities of a kick-drift step are half a
     step old when forces are evaluated, so callers extrapolate them (the kernel by
@@ -101,26 +102,59 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     O(dt²); at first touch it applies only the part of the step the bodies overlap, instead of
     switching the full c v0 on for a whole step, which made e depend on where first touch falls
     within a step (±1-2 % at e = 0.3, t_c/50).
+
+    Dissipated energy over the step, J, from the law itself (≥ 0): normal (F_n − F_spring)·δ̇·dt
+    (the dashpot's work, and the spring energy lost while F_n is clamped at 0) plus tangential
+    −F_t v_t dt − ½ k_t (ξ_new² − ξ²) (Coulomb slip, tangential damping, and the O(dt²) loss of
+    the spring's update ξ += v_t dt), with this step's k_t on both sides.
     """
     half = 0.5 * dt * ddelta
     hi = max(delta + half, 0.0)
     lo = max(delta - half, 0.0)
     d = max(delta, 0.0)
     if hertz != 0.0:
+        spring = kn * d * math.sqrt(d)
         dphi = 0.8 * (hi * math.sqrt(math.sqrt(hi)) - lo * math.sqrt(math.sqrt(lo)))
-        fn = kn * d * math.sqrt(d) + damp * math.sqrt(kn * m_eff) * dphi / dt
+        fn = spring + damp * math.sqrt(kn * m_eff) * dphi / dt
     else:
-        fn = kn * d + damp * math.sqrt(kn * m_eff) * (hi - lo) / dt
+        spring = kn * d
+        fn = spring + damp * math.sqrt(kn * m_eff) * (hi - lo) / dt
     if fn < 0.0 and clamp != 0.0:
         fn = 0.0
-    xi = xi + vt * dt
-    ct = 2.0 * dampt * math.sqrt(kt * m_eff)
-    ft = -kt * xi - ct * vt
+    ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0
+    stretched = xi + vt * dt
+    ft = -kt * stretched - ct * vt
     cap = mu * abs(fn)
     if abs(ft) > cap:
         ft = math.copysign(cap, ft)
-        xi = -(ft + ct * vt) / kt if kt > 0.0 else 0.0
-    return fn, ft, xi
+        slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0
+        lost = -ft * vt * dt - 0.5 * kt * (slid * slid - xi * xi)
+        xi = slid
+    else:  # sticking: −F_t v_t dt − ½ k_t (ξ_new² − ξ²) in closed form
+        lost = vt * vt * dt * (0.5 * kt * dt + ct)
+        xi = stretched
+    return fn, ft, xi, (fn - spring) * ddelta * dt + lost
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def tangential_stiffness(params, a, b, delta):
+    """Tangential stiffness k_t (N/m) of materials a, b at overlap delta (m): P_KT, or P_KT·√δ⁺
+    (Hertz)."""
+    kt = params[a, b, P_KT]
+    if params[a, b, P_HERTZ] != 0.0:
+        kt *= math.sqrt(max(delta, 0.0))
+    return kt
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def released(params, a, b, delta, xi):
+    """Energy ½ k_t ξ² of a tangential spring dropped when its contact ends at overlap delta, J.
+
+    A contact ends (the history is reset) with ξ ≠ 0 only when the law left it so at its last
+    step (tangential damping at F_n = 0, or an attractive F_n with end="overlap"); the spring
+    energy then counts as dissipated. Zero for Hertz rows (k_t = 0 at δ ≤ 0).
+    """
+    return 0.5 * tangential_stiffness(params, a, b, delta) * xi * xi
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -131,21 +165,19 @@ def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
     overlap at the step's time (may be ≤ 0 just before first touch), m; ddelta: approach rate
     dδ/dt at that time, m/s; vt: tangential slip rate of A's contact point relative to B's
     along t, m/s; m_eff: the contact's reduced mass, kg; xi: tangential spring elongation, m;
-    dt: step, s. Returns (fn, ft, xi_new): normal force on A along n (≥ 0 when clamped), N;
-    tangential force on A along t, N; elongation after this step, m.
+    dt: step, s. Returns (fn, ft, xi_new, dissipated): normal force on A along n (≥ 0 when
+    clamped), N; tangential force on A along t, N; elongation after this step, m; energy the
+    contact dissipated over the step, J.
 
-    Reads the table row and calls ``contact_force`` (the law and its time discretisation are
-    documented there); Hertz rows get the Mindlin-like k_t = P_KT·√δ.
+    Reads the table row and calls ``contact_force`` (the law, its time discretisation and the
+    dissipation are documented there); Hertz rows get the Mindlin-like k_t = P_KT·√δ.
     """
-    kt = params[a, b, P_KT]
-    if params[a, b, P_HERTZ] != 0.0:
-        kt *= math.sqrt(max(delta, 0.0))
     return contact_force(
         params[a, b, P_KN],
         params[a, b, P_DAMP],
         params[a, b, P_HERTZ],
         params[a, b, P_CLAMP],
-        kt,
+        tangential_stiffness(params, a, b, delta),
         params[a, b, P_DAMPT],
         params[a, b, P_MU],
         delta,

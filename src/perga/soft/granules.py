@@ -6,7 +6,9 @@ from collections.abc import Sequence
 import numba
 import numpy as np
 
+from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.soft import kernel
+from perga.soft import polygons as pg
 from perga.soft.contacts import (
     N_PARAMS,
     P_HERTZ,
@@ -50,9 +52,14 @@ class SoftGranules:
     ``chamber``/``plane``; gravity (2,), m/s²; dt: step, s (default ``dt_fraction`` times the
     shortest contact duration, Hertz evaluated at approach speed v_max, m/s); skin: Verlet skin,
     m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's).
+    polygons, polygon_table: convex rigid bodies (hammers) and the granule-polygon contact table
+    (``perga.soft.polygons``), both or neither; the granules' ``mat`` indexes the table's rows.
 
     The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
-    moving granules by hand so the neighbour list is rebuilt).
+    moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
+    ``polygons.HIST_COLUMNS``) is the granule-polygon contact history, impact totals included;
+    ``dissipated`` (3,) the energy the contact laws dissipated since the start (or ``relax``),
+    J: [granule pairs, walls, polygons] (``kernel.DISSIPATED_*``).
     """
 
     def __init__(
@@ -73,6 +80,8 @@ class SoftGranules:
         v_max: float = 30.0,
         skin: float | None = None,
         threads: int | None = None,
+        polygons: pg.PolygonSet | None = None,
+        polygon_table: pg.ContactTable | None = None,
     ) -> None:
         self.x = _f64(x, np.shape(x))
         n = self.x.shape[0]
@@ -102,6 +111,15 @@ class SoftGranules:
         if used.size and (used.min() < 0 or used.max() >= params.shape[0]):
             raise ValueError("a material index is outside the parameter table")
         self.wall_hist = np.zeros((n, self.walls.shape[0]))
+        if (polygons is None) != (polygon_table is None):
+            raise ValueError("give both polygons and polygon_table, or neither")
+        self.polygons = polygons
+        self.polygon_table = polygon_table
+        if polygons is not None and polygon_table is not None:
+            pg.check_materials(self.mat, polygons, polygon_table)
+        self._no_polygons = pg.no_polygons()
+        self.polygon_hist = np.zeros((n, self._poly[0].n_poly, pg.HIST_COLUMNS))
+        self.dissipated = np.zeros(3)
         self.gravity = _f64(gravity, (2,))
         self.v_max = float(v_max)
         self.t_c = self.shortest_contact_duration()
@@ -119,6 +137,13 @@ class SoftGranules:
         self.n_rebuilds = 0
 
     @property
+    def _poly(self) -> tuple[pg.PolygonSet, pg.ContactTable]:
+        """The polygons and their table, or empty ones."""
+        if self.polygons is None or self.polygon_table is None:
+            return self._no_polygons
+        return self.polygons, self.polygon_table
+
+    @property
     def n(self) -> int:
         """Number of granules."""
         return self.x.shape[0]
@@ -127,7 +152,8 @@ class SoftGranules:
         """Shortest head-on contact duration over the material pairs present, s.
 
         Granule pairs use the two smallest masses of their materials (m_eff grows with both
-        masses), walls the smallest granule mass; Hertz at approach speed v_max.
+        masses), walls the smallest granule mass, polygons ``_polygon_durations``; Hertz at
+        approach speed v_max.
         """
         if self.n == 0:
             return math.inf
@@ -144,7 +170,42 @@ class SoftGranules:
             for s in range(self.walls.shape[0]):
                 row = self.params[a, int(self.walls[s, 5])]
                 durations.append(contact_duration(row, m_min[int(a)], self.v_max))
-        return min(durations)
+        return min(durations + self._polygon_durations())
+
+    def _polygon_durations(self) -> list[float]:
+        """Shortest head-on granule-polygon contact duration per polygon, s.
+
+        The polygon's effective mass at its most yielding point (contact arm ρ, the bounding
+        radius, from the centre of mass or the pivot) with the granule of smallest m_eff
+        (linear) or m_eff/√r (Hertz, t_c ∝ (m_eff/(k_n √r))^{2/5}).
+        """
+        polys, table = self._poly
+        rho = pg.bounding_radii(polys.vertices, polys.start, polys.com)
+        out = []
+        for k in range(polys.n_poly):
+            if polys.kind[k] == pg.FREE:
+                inv_mp = 1.0 / polys.mass[k] + rho[k] ** 2 / polys.inertia[k]
+            elif polys.kind[k] == pg.PINNED:
+                arm = rho[k] + float(np.hypot(*(polys.pivot[k] - polys.com[k])))
+                inv_mp = arm**2 / polys.inertia[k]
+            else:
+                inv_mp = 0.0
+            m_eff = 1.0 / (1.0 / self.m + inv_mp)
+            for a in np.unique(self.mat):
+                b = int(polys.mat[k])
+                mine = self.mat == a
+                if table.law[a, b] == pg.LINEAR:
+                    m_min = float(m_eff[mine].min())
+                    contact = LinearSpringDashpot(
+                        table.k_n[a, b], table.damping[a, b], m_min, "force"
+                    )
+                    out.append(contact.duration)
+                else:
+                    i = int(np.argmin(np.where(mine, m_eff / np.sqrt(self.r), np.inf)))
+                    k_hertz = table.k_n[a, b] * math.sqrt(self.r[i])
+                    contact = HertzTsuji(k_hertz, table.damping[a, b], float(m_eff[i]), "force")
+                    out.append(contact.impact(self.v_max).duration)
+        return out
 
     def set_threads(self, threads: int) -> None:
         """Use ``threads`` numba threads (force chunks) from the next step on."""
@@ -156,9 +217,20 @@ class SoftGranules:
         self._rebuild = True
 
     def step(self, n_steps: int = 1, *, drag: float = 0.0, v_cap: float = math.inf) -> None:
-        """Advance n_steps steps of dt inside the compiled kernel (threads as configured)."""
+        """Advance n_steps steps of dt inside one compiled kernel call (threads as configured).
+
+        Polygons, if any, move rigidly from their current pose at their current velocities
+        during the call (the PINNED pivot with them); afterwards they hold the pose n_steps·dt
+        later (the granules' time), and ``polygons.force``, ``torque`` (about the centre of
+        mass) and ``moment`` (about the origin) are the means over the call, N and N·m.
+        ``drag`` (1/s) and ``v_cap`` (m/s) serve ``relax``; their losses are not in
+        ``dissipated``.
+        """
         if n_steps <= 0:
             return
+        polys, table = self._poly
+        if self.polygon_hist.shape != (self.n, polys.n_poly, pg.HIST_COLUMNS):
+            raise ValueError("polygon_hist does not match the granules and polygons")
         previous = numba.get_num_threads()
         numba.set_num_threads(self.threads)
         try:
@@ -175,6 +247,10 @@ class SoftGranules:
                 self.params,
                 self.walls,
                 self.wall_hist,
+                polys.arrays(),
+                table.arrays(),
+                self.polygon_hist,
+                polys.loads(),
                 self.gravity,
                 self.dt,
                 self.skin,
@@ -188,6 +264,7 @@ class SoftGranules:
                 float(drag),
                 float(v_cap),
                 self._rebuild,
+                self.dissipated,
             )
         finally:
             numba.set_num_threads(previous)
@@ -197,8 +274,11 @@ class SoftGranules:
 
     # --- diagnostics (NumPy, not per step) -------------------------------------------------
 
-    def _pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(i, j, overlap, list entry) of the granule pairs in contact now."""
+    def _pairs(
+        self, springs: bool = False
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, overlap, list entry) of the granule pairs overlapping now (δ > 0), with
+        ``springs`` also those holding a tangential spring."""
         if self._rebuild:
             self.start, self.nbr, self.hist = build(
                 self.x, self.r, self.skin, self.start, self.nbr, self.hist
@@ -213,7 +293,7 @@ class SoftGranules:
             return e, e, np.empty(0), e
         d = np.linalg.norm(self.x[i] - self.x[j], axis=1)
         delta = self.r[i] + self.r[j] - d
-        k = np.flatnonzero(delta > 0)
+        k = np.flatnonzero((delta > 0) | (springs & (self.hist != 0)))
         return i[k], j[k], delta[k], k
 
     def _walls_overlap(self) -> np.ndarray:
@@ -227,28 +307,50 @@ class SoftGranules:
         return out
 
     @staticmethod
-    def _spring_energy(rows: np.ndarray, delta: np.ndarray, xi: np.ndarray) -> np.ndarray:
+    def _spring_energy(
+        rows: np.ndarray,
+        delta: np.ndarray,
+        xi: np.ndarray,
+        normal: bool = True,
+        tangential: bool = True,
+    ) -> np.ndarray:
+        """Normal (over δ⁺) and/or tangential spring energy of contacts with rows ``rows``, J."""
+        delta = np.maximum(delta, 0.0)
         hertz = rows[:, P_HERTZ] != 0.0
         kn = rows[:, P_KN]
-        normal = np.where(hertz, 0.4 * kn * delta**2.5, 0.5 * kn * delta**2)
         kt = np.where(hertz, rows[:, P_KT] * np.sqrt(delta), rows[:, P_KT])
-        return normal + 0.5 * kt * xi**2
+        energy = np.where(hertz, 0.4 * kn * delta**2.5, 0.5 * kn * delta**2) * normal
+        return energy + 0.5 * kt * xi**2 * tangential
 
-    def contact_energy(self) -> float:
-        """Elastic energy stored in the normal and tangential springs of all contacts, J.
+    def contact_energy(self, *, normal: bool = True, tangential: bool = True) -> float:
+        """Elastic energy stored in the normal and/or tangential springs of all contacts, J:
+        granule pairs, walls and polygons (``polygon_contact_energy``).
 
-        Normal: k δ²/2 (linear), 2 k δ^{5/2}/5 (Hertz); tangential: k_t ξ²/2.
+        Normal: k δ²/2 (linear), 2 k δ^{5/2}/5 (Hertz), over overlaps δ > 0; tangential:
+        k_t ξ²/2 over every spring ξ ≠ 0 (also of a contact evaluated just before first touch).
+        After a step the overlaps are those at the granules' time t and the springs those updated
+        by the last step, i.e. half a step earlier (kick-drift): an energy balance closes to
+        O(dt²) with the normal part averaged over the step's start and end and the tangential
+        part taken at its end (``tests/soft/test_kernel_energy.py``).
         """
-        i, j, delta, k = self._pairs()
-        total = self._spring_energy(
-            self.params[self.mat[i], self.mat[j]], delta, self.hist[k]
-        ).sum()
+        parts = {"normal": normal, "tangential": tangential}
+        i, j, delta, k = self._pairs(springs=True)
+        rows = self.params[self.mat[i], self.mat[j]]
+        total = self._spring_energy(rows, delta, self.hist[k], **parts).sum()
         ov = self._walls_overlap()
         for s in range(self.walls.shape[0]):
-            c = np.flatnonzero(ov[:, s] > 0)
+            c = np.flatnonzero((ov[:, s] > 0) | (self.wall_hist[:, s] != 0))
             rows = self.params[self.mat[c], int(self.walls[s, 5])]
-            total += self._spring_energy(rows, ov[c, s], self.wall_hist[c, s]).sum()
-        return float(total)
+            total += self._spring_energy(rows, ov[c, s], self.wall_hist[c, s], **parts).sum()
+        return float(total) + self.polygon_contact_energy(**parts)
+
+    def polygon_contact_energy(self, *, normal: bool = True, tangential: bool = True) -> float:
+        """Elastic energy stored in the granule-polygon contacts at the polygons' current pose, J
+        (``polygons.contact_energy``; after ``step`` that pose is at the granules' time)."""
+        polys, table = self._poly
+        return pg.contact_energy(
+            self.x, self.r, self.mat, polys, table, self.polygon_hist, normal, tangential
+        )
 
     def kinetic_energy(self) -> float:
         """Translational plus rotational kinetic energy, J."""
@@ -301,27 +403,39 @@ class SoftGranules:
         and a speed cap (default 0.05 r_min/t_c: a granule moves at most 5 % of its radius per
         contact duration), in blocks of ``block`` steps, until no contact stores more normal
         energy than would launch its pair at v_release (m/s) and no granule moves faster than
-        v_release; then zeroes velocities, spins and tangential springs. Without it a densely
-        overlapping packing explodes (design §5: 485 m/s). Raises RuntimeError after max_steps.
+        v_release; then zeroes velocities, spins, tangential springs, the polygon contact history
+        and ``dissipated``. Polygons are held at rest meanwhile (their velocities are restored
+        afterwards); overlaps with them are not part of the release criterion. Without it a
+        densely overlapping packing explodes (design §5: 485 m/s). Raises RuntimeError after
+        max_steps.
         """
         drag = math.pi / self.t_c if drag is None else drag
         v_cap = 0.05 * float(self.r.min()) / self.t_c if v_cap is None else v_cap
+        polys = self._poly[0]
+        motion = polys.velocity.copy(), polys.omega.copy()
+        polys.velocity[:] = 0.0
+        polys.omega[:] = 0.0
         steps = 0
-        while True:
-            speed = float(np.sqrt(np.max(np.sum(self.v**2, axis=1), initial=0.0)))
-            if self.release_speed() <= v_release and speed <= v_release:
-                break
-            if steps >= max_steps:
-                raise RuntimeError(
-                    f"relax: overlaps not resolved after {steps} steps "
-                    f"(release speed {self.release_speed():.3g} m/s); the packing may be too dense"
-                )
-            self.step(block, drag=drag, v_cap=v_cap)
-            steps += block
+        try:
+            while True:
+                speed = float(np.sqrt(np.max(np.sum(self.v**2, axis=1), initial=0.0)))
+                if self.release_speed() <= v_release and speed <= v_release:
+                    break
+                if steps >= max_steps:
+                    raise RuntimeError(
+                        f"relax: overlaps not resolved after {steps} steps (release speed "
+                        f"{self.release_speed():.3g} m/s); the packing may be too dense"
+                    )
+                self.step(block, drag=drag, v_cap=v_cap)
+                steps += block
+        finally:
+            polys.velocity[:], polys.omega[:] = motion
         self.v[:] = 0.0
         self.w[:] = 0.0
         self.hist[:] = 0.0
         self.wall_hist[:] = 0.0
+        self.polygon_hist[:] = 0.0
+        self.dissipated[:] = 0.0
         self.time = 0.0
         return steps
 

@@ -20,10 +20,26 @@ energy (design §8: e = 1.18 at t_c/10); this scheme is stable to about dt = t_c
 t_c/50 by default. Optional global drag (1/s, implicit: v ← v/(1 + drag·dt)) and a speed cap
 v_cap (m/s) serve ``SoftGranules.relax`` only; normal runs have drag = 0, v_cap = inf.
 
+Polygons (hammers, ``perga.soft.polygons``): ``poly`` = ``PolygonSet.arrays()``, ``table`` =
+``ContactTable.arrays()``, ``loads`` = ``PolygonSet.loads()``, history ``phist`` (n, n_poly,
+``HIST_COLUMNS``); empty arrays for none. During a call of n steps each polygon moves rigidly
+from its pose at the call's first force evaluation with its (fixed) velocities: at step j
+(0-based) it is where ``polygons.pose`` puts it j·dt later, the PINNED pivot moving with it.
+After the call the set holds the pose n·dt later (the granules' time) and the loads are the
+means over the call. Contacts are evaluated for a candidate list (``polygons.candidates``),
+built at the call's first step and after every neighbour-list rebuild, so that granules far
+from every polygon cost nothing per step.
+
+Dissipation: every contact reports the energy its law dissipated over the step
+(``contacts.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
+contact's end ½ k_t ξ²); ``dissipated`` (3,) accumulates [granule pairs, walls, polygons], J.
+
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
 accumulating into its own slice of ``acc`` (n_chunks, n, 3), summed per granule afterwards, so
 each pair is computed once and no two threads write the same memory (no races, results
-identical for a given n_chunks). Everything else is per granule.
+identical for a given n_chunks). Everything else is per granule; polygon loads and their
+dissipation are summed per candidate entry in a fixed order afterwards, so they and the
+granules' polygon forces do not depend on the number of threads.
 """
 
 import math
@@ -31,17 +47,22 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from perga.soft.contacts import FASTMATH, contact_law, rolling_torque, touching
+from perga.soft import polygons as pg
+from perga.soft.contacts import FASTMATH, contact_law, released, rolling_torque, touching
 from perga.soft.neighbours import build
 
 WALL_CHAMBER = 0
 WALL_PLANE = 1
 WALL_COLUMNS = 6
 
+DISSIPATED_PAIRS, DISSIPATED_WALLS, DISSIPATED_POLYGONS = 0, 1, 2
+"""Entries of the (3,) dissipated-energy totals of ``advance``."""
+
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
-    """Force (fx, fy) on i (−it on j), torques on i and j, for list entry k; updates hist[k]."""
+    """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
+    k; updates hist[k]."""
     h = 0.5 * dt
     dx = x[i, 0] - x[j, 0]
     dy = x[i, 1] - x[j, 1]
@@ -61,17 +82,23 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
     wj = w[j] + h * a_prev[j, 2]
     ddelta = -(vrx * nx + vry * ny)
     if not touching(rs - d, ddelta, dt):
+        xi = hist[k]
+        if xi == 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0
+        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - d, xi)
     tx = -ny
     ty = nx
-    vt = vrx * tx + vry * ty - (r[i] * wi + r[j] * wj)
+    # Lever arms to the middle of the overlap, or of the gap just before first touch: they sum
+    # to d, so both discs load one common point and angular momentum is conserved.
+    half = 0.5 * (rs - d)
+    arm_i = r[i] - half
+    arm_j = r[j] - half
+    vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
     m_eff = m[i] * m[j] / (m[i] + m[j])
     a = mat[i]
     b = mat[j]
-    fn, ft, hist[k] = contact_law(params, a, b, rs - d, ddelta, vt, m_eff, hist[k], dt)
-    ti = -r[i] * ft
-    tj = -r[j] * ft
+    fn, ft, hist[k], lost = contact_law(params, a, b, rs - d, ddelta, vt, m_eff, hist[k], dt)
     mr = rolling_torque(
         params,
         a,
@@ -82,12 +109,17 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
         inertia[i] * inertia[j] / (inertia[i] + inertia[j]),
         dt,
     )
-    return fn * nx + ft * tx, fn * ny + ft * ty, ti + mr, tj - mr
+    if mr != 0.0:
+        lost += abs(mr * (wi - wj)) * dt
+    ti = -arm_i * ft
+    tj = -arm_j * ft
+    return fn * nx + ft * tx, fn * ny + ft * ty, ti + mr, tj - mr, lost
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc):
-    """Pair forces into acc (n_chunks, n, 3) = (fx, fy, torque), one slice per chunk of i."""
+def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost):
+    """Pair forces into acc (n_chunks, n, 3) = (fx, fy, torque), one slice per chunk of i; the
+    energy the chunk's contacts dissipated into lost[c], J."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -98,10 +130,11 @@ def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, d
             a[i, 0] = 0.0
             a[i, 1] = 0.0
             a[i, 2] = 0.0
+        dissipated = 0.0
         for i in range(lo, hi):
             for k in range(start[i], start[i + 1]):
                 j = nbr[k]
-                fx, fy, ti, tj = pair_force(
+                fx, fy, ti, tj, de = pair_force(
                     i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt
                 )
                 a[i, 0] += fx
@@ -110,11 +143,14 @@ def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, d
                 a[j, 0] -= fx
                 a[j, 1] -= fy
                 a[j, 2] += tj
+                dissipated += de
+        lost[c] = dissipated
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist, dt):
-    """Sum of the wall forces and torque on granule i: (fx, fy, tq); updates wall_hist[i]."""
+    """Sum of the wall forces and torque on granule i and the energy they dissipated:
+    (fx, fy, tq, J); updates wall_hist[i]."""
     h = 0.5 * dt
     ux = v[i, 0] + h * a_prev[i, 0]
     uy = v[i, 1] + h * a_prev[i, 1]
@@ -122,6 +158,7 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist,
     fx = 0.0
     fy = 0.0
     tq = 0.0
+    lost = 0.0
     for s in range(walls.shape[0]):
         if walls[s, 0] == WALL_CHAMBER:
             dx = x[i, 0] - walls[s, 1]
@@ -140,54 +177,24 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist,
             delta = r[i] - ((x[i, 0] - walls[s, 1]) * nx + (x[i, 1] - walls[s, 2]) * ny)
         ddelta = -(ux * nx + uy * ny)
         if not touching(delta, ddelta, dt):
-            wall_hist[i, s] = 0.0
+            xi = wall_hist[i, s]
+            if xi != 0.0:
+                lost += released(params, mat[i], int(walls[s, 5]), delta, xi)
+                wall_hist[i, s] = 0.0
             continue
+        b = int(walls[s, 5])
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
-        b = int(walls[s, 5])
-        fn, ft, wall_hist[i, s] = contact_law(
+        fn, ft, wall_hist[i, s], de = contact_law(
             params, mat[i], b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
         )
+        mr = rolling_torque(params, mat[i], b, fn, wi, r[i], inertia[i], dt)
         fx += fn * nx + ft * tx
         fy += fn * ny + ft * ty
-        tq += -r[i] * ft + rolling_torque(params, mat[i], b, fn, wi, r[i], inertia[i], dt)
-    return fx, fy, tq
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def compute_forces(
-    x,
-    v,
-    w,
-    a_prev,
-    r,
-    m,
-    inertia,
-    mat,
-    params,
-    start,
-    nbr,
-    hist,
-    walls,
-    wall_hist,
-    dt,
-    acc,
-    f,
-    tq,
-):
-    """Add pair and wall forces to f (n, 2) and torques to tq (n,) (modular path, no stepping)."""
-    pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc)
-    n = x.shape[0]
-    for i in prange(n):
-        fx, fy, t = wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist, dt)
-        for c in range(acc.shape[0]):
-            fx += acc[c, i, 0]
-            fy += acc[c, i, 1]
-            t += acc[c, i, 2]
-        f[i, 0] += fx
-        f[i, 1] += fy
-        tq[i] += t
+        tq += -r[i] * ft + mr
+        lost += de + abs(mr * wi) * dt if mr != 0.0 else de
+    return fx, fy, tq, lost
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -214,19 +221,6 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def kick_drift(x, v, w, m, inertia, f, tq, gravity, dt, drag, v_cap, a_prev):
-    """One symplectic Euler step from forces f (n, 2), torques tq (n,): kick v, w; drift x.
-
-    Records the accelerations in a_prev (n, 3) for the next force evaluation.
-    """
-    damp = 1.0 / (1.0 + drag * dt)
-    for i in prange(x.shape[0]):
-        _kick_drift_one(
-            i, x, v, w, m, inertia, f[i, 0], f[i, 1], tq[i], gravity, dt, damp, v_cap, a_prev
-        )
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     x,
     v,
@@ -239,6 +233,13 @@ def _integrate(
     params,
     walls,
     wall_hist,
+    poly,
+    table,
+    rho,
+    phist,
+    cstart,
+    cpoly,
+    ploads,
     gravity,
     dt,
     drag,
@@ -247,12 +248,15 @@ def _integrate(
     f,
     tq,
     x_ref,
-    disp,
+    chunk,
 ):
-    """Fused per-granule pass: wall forces, sum of chunks, kick-drift, displacement² since build.
+    """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
-    Writes the step's total contact force and torque to f and tq; disp[c] = (max displacement²,
-    max speed²) of chunk c (a per-chunk max instead of a shared reduction variable).
+    Writes the step's total contact force and torque to f and tq; chunk[c] = (max displacement²
+    since the list build, max speed², wall dissipation, J) of chunk c (per-chunk values instead
+    of shared reduction variables). Polygon contacts: the candidate pairs (cstart, cpoly) of
+    each granule; entry e's load on its polygon and dissipation go to ploads[e] (see
+    ``polygons.add_loads``).
     """
     n = x.shape[0]
     n_chunks = acc.shape[0]
@@ -262,14 +266,27 @@ def _integrate(
         hi = (c + 1) * n // n_chunks
         dmax = 0.0
         smax = 0.0
+        lost = 0.0
         for i in range(lo, hi):
-            fx, fy, t = wall_force(
+            fx, fy, t, de = wall_force(
                 i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist, dt
             )
+            lost += de
             for q in range(n_chunks):
                 fx += acc[q, i, 0]
                 fy += acc[q, i, 1]
                 t += acc[q, i, 2]
+            for e in range(cstart[i], cstart[i + 1]):
+                _, px, py, ti, tk, de = pg.polygon_contact(
+                    i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
+                )
+                fx += px
+                fy += py
+                t += ti
+                ploads[e, 0] = -px
+                ploads[e, 1] = -py
+                ploads[e, 2] = tk
+                ploads[e, 3] = de
             f[i, 0] = fx
             f[i, 1] = fy
             tq[i] = t
@@ -278,8 +295,22 @@ def _integrate(
             ey = x[i, 1] - x_ref[i, 1]
             dmax = max(dmax, ex * ex + ey * ey)
             smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-        disp[c, 0] = dmax
-        disp[c, 1] = smax
+        chunk[c, 0] = dmax
+        chunk[c, 1] = smax
+        chunk[c, 2] = lost
+
+
+@njit(cache=True)
+def _stale(x, v, x_ref, skin, dt):
+    """Whether the list built at x_ref must be rebuilt: 2·max|x − x_ref| + dt·max|v| > skin."""
+    dmax = 0.0
+    smax = 0.0
+    for i in range(x.shape[0]):
+        ex = x[i, 0] - x_ref[i, 0]
+        ey = x[i, 1] - x_ref[i, 1]
+        dmax = max(dmax, ex * ex + ey * ey)
+        smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+    return 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
 
 
 @njit(cache=True)
@@ -296,6 +327,10 @@ def advance(
     params,
     walls,
     wall_hist,
+    poly,
+    table,
+    phist,
+    loads,
     gravity,
     dt,
     skin,
@@ -309,36 +344,54 @@ def advance(
     drag,
     v_cap,
     rebuild,
+    dissipated,
 ):
     """Advance n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds).
 
     Rebuilds the neighbour list (carrying the tangential history over) before a step when
     2·(largest displacement since the last build) + dt·(largest speed) exceeds the skin (the
     dt·v term keeps listed every pair that ``touching`` may need half a step before first
-    contact), when start is not a list for
-    these n granules, or when rebuild is True; x_ref (n, 2) holds the positions at the last
-    build and is updated in place. On return f and tq hold the contact forces and torques of
-    the last step and a_prev its accelerations.
+    contact), when start is not a list for these n granules, or when rebuild is True; x_ref
+    (n, 2) holds the positions at the last build and is updated in place. The polygon candidate
+    list (``polygons.candidates``) is built at the first step and after every rebuild. On
+    return f and tq hold the contact forces and torques of the last step, a_prev its
+    accelerations, the polygons their pose n_steps·dt after the call's start and loads the mean
+    force, torque and moment over the call; the dissipated energy (3,) has been added to.
     """
     n = x.shape[0]
     n_chunks = acc.shape[0]
-    disp = np.zeros((n_chunks, 2))
-    half2 = 0.25 * skin * skin
+    force, torque, moment = loads
+    n_poly = force.shape[0]
+    verts0 = poly[0].copy()
+    com0 = poly[2].copy()
+    pivot0 = poly[8].copy()
+    rho = pg.bounding_radii(poly[0], poly[1], poly[2])
+    force[:, :] = 0.0
+    torque[:] = 0.0
+    moment[:] = 0.0
+    chunk = np.zeros((n_chunks, 3))
+    lost = np.zeros(n_chunks)
+    cstart = np.zeros(n + 1, np.int64)
+    cpoly = np.zeros(0, np.int64)
+    ploads = np.zeros((0, 4))
     n_rebuilds = 0
-    need = rebuild or start.shape[0] != n + 1
-    if not need:
-        for i in range(n):
-            ex = x[i, 0] - x_ref[i, 0]
-            ey = x[i, 1] - x_ref[i, 1]
-            if ex * ex + ey * ey > half2:
-                need = True
-                break
-    for _ in range(n_steps):
+    need = rebuild or start.shape[0] != n + 1 or _stale(x, v, x_ref, skin, dt)
+    fresh = False
+    for step in range(n_steps):
         if need:
             start, nbr, hist = build(x, r, skin, start, nbr, hist)
             x_ref[:, :] = x
             n_rebuilds += 1
-        pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc)
+            fresh = False
+        if n_poly > 0:
+            if step > 0:
+                pg.pose(verts0, com0, pivot0, poly, step * dt)
+            if not fresh:
+                span = (n_steps - 1 - step) * dt
+                cstart, cpoly = pg.candidates(x_ref, r, poly, rho, phist, span, skin, dt)
+                ploads = np.zeros((cpoly.shape[0], 4))
+                fresh = True
+        pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost)
         _integrate(
             x,
             v,
@@ -351,6 +404,13 @@ def advance(
             params,
             walls,
             wall_hist,
+            poly,
+            table,
+            rho,
+            phist,
+            cstart,
+            cpoly,
+            ploads,
             gravity,
             dt,
             drag,
@@ -359,14 +419,25 @@ def advance(
             f,
             tq,
             x_ref,
-            disp,
+            chunk,
         )
+        if n_poly > 0:
+            dissipated[DISSIPATED_POLYGONS] += pg.add_loads(
+                cpoly, ploads, poly[2], force, torque, moment
+            )
         dmax = 0.0
         smax = 0.0
         for c in range(n_chunks):
-            dmax = max(dmax, disp[c, 0])
-            smax = max(smax, disp[c, 1])
+            dmax = max(dmax, chunk[c, 0])
+            smax = max(smax, chunk[c, 1])
+            dissipated[DISSIPATED_PAIRS] += lost[c]
+            dissipated[DISSIPATED_WALLS] += chunk[c, 2]
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
+    if n_poly > 0 and n_steps > 0:
+        pg.pose(verts0, com0, pivot0, poly, n_steps * dt)
+        force /= n_steps
+        torque /= n_steps
+        moment /= n_steps
     return start, nbr, hist, n_rebuilds
 
 
