@@ -5,8 +5,8 @@ from pathlib import Path
 import pytest
 
 from perga.case import CaseError, load_case
-from perga.case.checks import resolved_time_step
 from perga.case.reference import markdown_reference
+from perga.case.timestep import step_plan
 from perga.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -18,7 +18,7 @@ BAD = sorted((ROOT / "tests" / "cases" / "bad").glob("*.toml"))
 def test_bundled_case_validates(path):
     case = load_case(path)
     if case.chamber is not None:
-        assert 0 < resolved_time_step(case) <= 0.01
+        assert 0 < step_plan(case).granule <= 0.01
 
 
 @pytest.mark.parametrize("path", BAD, ids=lambda p: p.name)

@@ -23,9 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from perga.case.schema import Case
+from perga.case.timestep import step_plan
 from perga.engine.from_case import scene_spec
 from perga.engine.scene import build_scene
 from perga.engine.simulation import Simulation
+from perga.engine.soft_simulation import SoftSimulation
 from perga.output.recorders import RECORDERS, PhaseLock, Recorder
 
 
@@ -42,6 +44,7 @@ class RunSummary:
     reason: str = ""
     steps: int = 0
     dt: float = 0.0
+    time_step: dict[str, float | str] = field(default_factory=dict)
     simulated_time: float = 0.0
     wall_time: float = 0.0
     steps_per_second: float = 0.0
@@ -125,19 +128,22 @@ def run_case(
     try:
         spec = scene_spec(case)
         record = case.output.record
-        sim = Simulation(
-            build_scene(spec),
-            record_impacts="impacts" in record,
-            track_energy="energy" in record,
+        options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
+        sim = (
+            SoftSimulation.from_spec(spec, **options)
+            if spec.soft
+            else Simulation(build_scene(spec), **options)
         )
+        plan = step_plan(case)
         summary.dt, summary.granules, summary.hammers = (
             spec.dt,
             len(spec.granules),
             len(spec.hammers),
         )
+        summary.time_step = asdict(plan) | {"contact_model": case.contact_model.kind}
         recorders = [RECORDERS[name](directory) for name in record]
         frames = PhaseLock(case.output.every)
-        n_steps = math.ceil(case.solver.duration / spec.dt - 1e-9)
+        n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
         chamber = case.chamber
         report_every = max(1, n_steps // 200)
 

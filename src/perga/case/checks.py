@@ -2,8 +2,9 @@
 
 They run after the schema has accepted every field (a cross-check needs valid values): names that
 resolve, a hammer that fits in the chamber, granules that neither overlap each other nor the wall
-at the start, effects that fit the rotor's plane, and a time step that neither lets a granule
-pass through a hammer or the wall nor turns the rotor too far in one step.
+at the start, effects that fit the rotor's plane, restitutions a soft contact model can reach,
+and a time step (:mod:`perga.case.timestep`) that neither lets a granule pass through a hammer
+or the wall nor turns the rotor too far in one step, and resolves soft contacts.
 """
 
 from __future__ import annotations
@@ -12,12 +13,14 @@ import math
 
 import numpy as np
 
-from perga.analytic.contact import tunnelling_time_step
+from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
 from perga.case.placement import initial_state
 from perga.case.schema import Case, ExplicitPlacement, RandomPlacement
+from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
 
-MAX_ROTATION_PER_STEP = 0.05
-"""Largest rotor turn in one step, rad (about 3°): hinge and contact geometry stay resolved."""
+MIN_STEPS_PER_CONTACT = 10
+"""Fewest steps per soft contact accepted (symplectic Euler is stable to about t_c/5; e drifts
+by a few per cent below t_c/20)."""
 
 MAX_RANDOM_PACKING = 0.5
 """Largest area fraction a random non-overlapping pack of discs is asked to fill (random
@@ -60,6 +63,14 @@ def _hammers(case: Case) -> list[str]:
     problems = []
     if h.mount != "free" and h.velocity != (0.0, 0.0):
         problems.append(f"hammers.velocity: only for mount = 'free' (got {h.velocity})")
+    if h.swing_limit is not None:
+        if h.mount != "hinged":
+            problems.append("hammers.swing_limit: stops are for mount = 'hinged'")
+        elif abs(h.swing_angle) > h.swing_limit:
+            problems.append(
+                f"hammers.swing_angle: {h.swing_angle:g} rad is past the stops at "
+                f"±swing_limit = {h.swing_limit:g} rad"
+            )
     if h.mount == "welded" and h.swing_angle != 0.0:
         problems.append(f"hammers.swing_angle: a welded hammer is radial (got {h.swing_angle})")
     if h.angles is not None and len(h.angles) != h.count:
@@ -162,51 +173,64 @@ def _effects(case: Case) -> list[str]:
     return problems
 
 
-def fastest_relative_speed(case: Case) -> float:
-    """Upper bound on a granule's speed relative to a hammer or the wall, m/s: the hammer tip's
-    speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed."""
-    h = case.hammers
-    tip = h.hinge_radius + h.shape.length - h.shape.hinge_offset
-    speed = case.rotor.angular_velocity * tip + math.hypot(*h.velocity)
-    placement = case.granules.placement
-    if isinstance(placement, ExplicitPlacement) and placement.velocities:
-        speed += float(np.max(np.hypot(*np.array(placement.velocities, dtype=float).T)))
-    return speed
-
-
-def thinnest_obstacle(case: Case) -> float:
-    """The thinner of a hammer plate and the chamber wall, m."""
-    hammer = case.hammer_plate.thickness
-    return min(hammer, case.chamber.wall_thickness) if case.chamber else hammer
-
-
-def resolved_time_step(case: Case) -> float:
-    """solver.dt, or for 'auto' half the tunnelling bound, capped by the rotation per step, s."""
-    if case.solver.dt != "auto":
-        return case.solver.dt
-    bound = tunnelling_time_step(
-        case.granules.radius, thinnest_obstacle(case), fastest_relative_speed(case)
-    )
-    return min(0.5 * bound, MAX_ROTATION_PER_STEP / case.rotor.angular_velocity)
+def _contact_model(case: Case) -> list[str]:
+    cm = case.contact_model
+    if not cm.soft:
+        return []
+    problems = []
+    if case.solver.substeps != 1:
+        problems.append(
+            f"solver.substeps: must be 1 with soft contacts (got {case.solver.substeps}); "
+            "contact_model.granule_substeps sets the granule steps per Pymunk step"
+        )
+    if not case.granules.rolls:
+        problems.append(
+            "granules.rolls: must be true with soft contacts (a soft granule is a disc with "
+            "I = m r²/2; sliding points need contact_model.kind = 'rigid')"
+        )
+    tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
+    for i, contact in enumerate(case.contacts):
+        try:
+            tune(contact.restitution, cm.end)
+        except ValueError:
+            problems.append(
+                f"contacts[{i}].restitution: {contact.restitution:g} is out of reach of a "
+                f"{cm.kind} contact that ends at zero {cm.end}: needs e in "
+                f"({FORCE_END_MIN_RESTITUTION if cm.end == 'force' else 0:.4g}, 1]"
+                + ("; contact_model.end = 'overlap' reaches any e > 0" if cm.end == "force" else "")
+            )
+    return problems
 
 
 def _time_step(case: Case) -> list[str]:
     if case.chamber is None or case.granules.placement is None:
         return []
-    dt = resolved_time_step(case)
+    try:
+        plan = step_plan(case)
+    except ValueError:  # an unreachable restitution, reported by _contact_model
+        return []
     problems = []
     v = fastest_relative_speed(case)
-    bound = tunnelling_time_step(case.granules.radius, thinnest_obstacle(case), v)
-    if dt > bound:
+    if plan.granule > plan.tunnelling:
         problems.append(
-            f"solver.dt: {dt:g} s lets a granule pass through a hammer or the wall at the fastest "
-            f"relative speed {v:.3g} m/s: needs <= 0.5·(radius + thickness/2)/v = {bound:.3g} s"
+            f"solver.dt: {plan.granule:g} s lets a granule pass through a hammer or the wall at "
+            f"the fastest relative speed {v:.3g} m/s: needs <= 0.5·(radius + thickness/2)/v = "
+            f"{plan.tunnelling:.3g} s"
         )
-    turn = case.rotor.angular_velocity * dt
+    turn = case.rotor.angular_velocity * plan.machine
     if turn > MAX_ROTATION_PER_STEP:
         problems.append(
-            f"solver.dt: the rotor turns {turn:.3g} rad per step; needs <= {MAX_ROTATION_PER_STEP} "
-            f"rad, i.e. dt <= {MAX_ROTATION_PER_STEP / case.rotor.angular_velocity:.3g} s"
+            f"solver.dt: the rotor turns {turn:.3g} rad per step; needs <= "
+            f"{MAX_ROTATION_PER_STEP} rad, i.e. a step <= "
+            f"{MAX_ROTATION_PER_STEP / case.rotor.angular_velocity:.3g} s"
+        )
+    steps = plan.contact_duration / plan.granule
+    if steps < MIN_STEPS_PER_CONTACT:
+        problems.append(
+            f"solver.dt: {plan.granule:g} s resolves the shortest contact (t_c = "
+            f"{plan.contact_duration:.3g} s) with {steps:.3g} steps; needs >= "
+            f"{MIN_STEPS_PER_CONTACT} (dt <= {plan.contact_duration / MIN_STEPS_PER_CONTACT:.3g} "
+            "s); 'auto' gives t_c/contact_model.steps_per_contact"
         )
     return problems
 
@@ -216,6 +240,6 @@ def check_case(case: Case) -> list[str]:
     problems = _names(case)
     if problems:
         return problems
-    for check in (_hammers, _granules, _effects, _time_step):
+    for check in (_hammers, _granules, _effects, _contact_model, _time_step):
         problems += check(case)
     return problems

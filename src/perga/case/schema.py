@@ -94,6 +94,13 @@ class Hammers(Strict):
         description="initial angle α of each hammer to the radial "
         "line through its hinge, rad, in [−π, π] (hinged and free hammers)",
     )
+    swing_limit: float | None = Field(
+        None,
+        gt=0,
+        le=3.1416,
+        description="stops of a hinged hammer: |α| <= swing_limit, rad, in (0, π]; default: "
+        "free to swing all round",
+    )
     velocity: tuple[float, float] = Field(
         (0.0, 0.0), description="initial centre-of-mass velocity of a free hammer, m/s"
     )
@@ -289,13 +296,16 @@ class Solver(Strict):
     """[solver]: time stepping."""
 
     dt: float | Literal["auto"] = Field(
-        "auto", description="time step, s, in (0, 0.01], or 'auto' (from contact and tunnelling)"
+        "auto",
+        description="time step, s, in (0, 0.01], or 'auto' (from contact duration, tunnelling "
+        "and rotor turn); with soft contacts the granules' step",
     )
     substeps: int = Field(
         1,
         ge=1,
         le=1000,
-        description="Pymunk steps per time step dt (each of dt/substeps), in [1, 1000]",
+        description="rigid contacts: Pymunk steps per time step dt (each of dt/substeps), in "
+        "[1, 1000]; soft contacts: 1 (see contact_model.granule_substeps)",
     )
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
     duration: float = Field(0.1, gt=0, le=3600, description="simulated time, s, in (0, 3600]")
@@ -306,6 +316,69 @@ class Solver(Strict):
         if self.dt != "auto" and not 0 < self.dt <= 0.01:
             raise ValueError(f"solver.dt must be in (0, 0.01] s or 'auto' (got {self.dt})")
         return self
+
+
+class ContactModel(Strict):
+    """[contact_model]: how granule contacts are resolved.
+
+    'rigid': Pymunk impulses (instantaneous, restitution and friction exact per impact);
+    'linear' or 'hertz': soft spring-dashpot contacts of finite duration integrated by perga's
+    kernel (:mod:`perga.soft`), damping tuned to each pair's restitution, Cundall-Strack
+    tangential spring capped by the pair's friction.
+    """
+
+    kind: Literal["rigid", "linear", "hertz"] = Field(
+        "rigid", description="'rigid' (Pymunk impulses), 'linear' or 'hertz' (soft contacts)"
+    )
+    duration: float | None = Field(
+        None,
+        gt=0,
+        le=0.01,
+        description="linear only: contact duration t_c of a granule striking a rigid wall "
+        "head-on with the granule-hammer restitution, s, in (0, 0.01]; sets k_n (or stiffness)",
+    )
+    stiffness: float | None = Field(
+        None,
+        gt=0,
+        description="normal stiffness k_n, > 0: N/m (linear; or duration) or (4/3)E*, Pa "
+        "(hertz: the contact stiffness is k_n·√R_eff)",
+    )
+    tangential_ratio: float = Field(
+        2.0 / 7.0, ge=0, le=1, description="k_t/k_n, in [0, 1]; default 2/7 (as LAMMPS)"
+    )
+    rolling: float = Field(
+        0.0, ge=0, le=1, description="rolling-resistance coefficient μ_r, in [0, 1]"
+    )
+    end: Literal["force", "overlap"] = Field(
+        "force",
+        description="contact ends when the force returns to zero ('force', e > e⁻² ≈ 0.135) "
+        "or when the overlap does ('overlap', attractive force allowed; any e > 0)",
+    )
+    steps_per_contact: float = Field(
+        50.0, ge=10, le=1000, description="automatic step: t_c/steps_per_contact, in [10, 1000]"
+    )
+    granule_substeps: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="soft granule steps per Pymunk step of the rotor and hammers, in [1, 100]",
+    )
+
+    @model_validator(mode="after")
+    def _stiffness_given(self) -> ContactModel:
+        if self.kind == "rigid":
+            if self.duration is not None or self.stiffness is not None:
+                raise ValueError("duration and stiffness are for kind = 'linear' or 'hertz'")
+        elif self.kind == "linear" and (self.duration is None) == (self.stiffness is None):
+            raise ValueError("kind = 'linear' needs exactly one of duration (s) or stiffness (N/m)")
+        elif self.kind == "hertz" and (self.stiffness is None or self.duration is not None):
+            raise ValueError("kind = 'hertz' needs stiffness ((4/3)E*, Pa) and no duration")
+        return self
+
+    @property
+    def soft(self) -> bool:
+        """Whether granule contacts are soft (perga's kernel) rather than Pymunk impulses."""
+        return self.kind != "rigid"
 
 
 class Output(Strict):
@@ -330,6 +403,7 @@ class Case(Strict):
     contacts: list[ContactPair] = Field(min_length=1)
     chamber: Chamber | None = Field(None, description="the wall (needed by perga run)")
     effects: Effects = Field(default_factory=Effects)
+    contact_model: ContactModel = Field(default_factory=ContactModel)
     solver: Solver = Field(default_factory=Solver)
     output: Output = Field(default_factory=Output)
     gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")

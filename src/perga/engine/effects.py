@@ -54,7 +54,7 @@ if TYPE_CHECKING:
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
 
-Term = Literal["friction", "drag", "drive"]
+Term = Literal["friction", "drag", "drive", "contact"]
 FloatArray = NDArray[np.float64]
 
 
@@ -118,9 +118,16 @@ class _Kicks:
         if self.writer.count == 0:
             return
         velocities, positions = self.writer.read_internal(positions=self._positions)
-        for effect in self.kicks:
-            velocities = effect.kick(velocities, positions, dt)
-        self.writer.write_internal_velocities(velocities)
+        self.writer.write_internal_velocities(run_kicks(self.kicks, velocities, positions, dt))
+
+
+def run_kicks(
+    kicks: list[Kick], velocities: FloatArray, positions: FloatArray | None, dt: float
+) -> FloatArray:
+    """The granules' velocities after every kick in ``kicks``, in order (internal units)."""
+    for effect in kicks:
+        velocities = effect.kick(velocities, positions, dt)
+    return velocities
 
 
 def _speeds(v: FloatArray) -> FloatArray:
@@ -128,8 +135,8 @@ def _speeds(v: FloatArray) -> FloatArray:
 
 
 def _granule_masses(scene: Scene) -> FloatArray:
-    """Granule masses, internal units, spec order."""
-    return np.array([b.mass for b in scene.granule_bodies], dtype=np.float64)
+    """Granule masses, internal units, spec order (the granules' bodies hold the same values)."""
+    return np.array([u.to_internal(g.mass, u.MASS) for g in scene.spec.granules], dtype=np.float64)
 
 
 _REGISTRY: dict[str, Callable[[Scene, Any], Effect]] = {}
@@ -206,6 +213,36 @@ class HingeFriction(Effect):
     def _post_solve(self, motor: pymunk.Constraint, _space: pymunk.Space) -> None:
         mean = 0.5 * (self._before[motor] + self._relative(motor))
         self._removed += motor.impulse * abs(mean)
+
+
+class SwingStops(Effect):
+    """The stops of hinged hammers (``RotaryLimitJoint``, built by the scene when a hammer has
+    a ``swing_limit``): a hammer swinging into its stop is stopped by a perfectly inelastic
+    angular impulse. Removed energy per step, as for hinge friction: |j|·|ω̄_rel|, the stop's
+    angular impulse times the mean relative angular velocity before and after the step; it
+    is counted with the contacts' dissipation. Not in the registry: built for the hammers
+    that have stops, not from ``EffectsSpec``."""
+
+    name = "swing_stops"
+    term = "contact"
+
+    def __init__(self, stops: list[pymunk.RotaryLimitJoint]) -> None:
+        super().__init__()
+        self._before: dict[pymunk.Constraint, float] = {}
+        for stop in stops:
+            stop.pre_solve = self._pre_solve
+            stop.post_solve = self._post_solve
+
+    @staticmethod
+    def _relative(stop: pymunk.Constraint) -> float:
+        return stop.b.angular_velocity - stop.a.angular_velocity
+
+    def _pre_solve(self, stop: pymunk.Constraint, _space: pymunk.Space) -> None:
+        self._before[stop] = self._relative(stop)
+
+    def _post_solve(self, stop: pymunk.Constraint, _space: pymunk.Space) -> None:
+        mean = 0.5 * (self._before[stop] + self._relative(stop))
+        self._removed += stop.impulse * abs(mean)
 
 
 @_register
@@ -293,8 +330,10 @@ class AirDrag(Kick):
 
 
 def build_effects(scene: Scene) -> list[Effect]:
-    """Build the effects ``scene.spec.effects`` lists, in registry order; if some are kicks, the
-    first of them gets the runner (a :class:`~perga.engine.state.GranuleWriter`) for all."""
+    """Build the effects ``scene.spec.effects`` lists, in registry order; if some are kicks on
+    Pymunk granules, the first of them gets the runner (a
+    :class:`~perga.engine.state.GranuleWriter`) for all. Soft granules (``spec.soft``) are
+    kicked by their simulation through :func:`run_kicks`."""
     listed = scene.spec.effects
     effects = [
         make(scene, getattr(listed, name))
@@ -302,6 +341,6 @@ def build_effects(scene: Scene) -> list[Effect]:
         if getattr(listed, name) is not None
     ]
     kicks = [e for e in effects if isinstance(e, Kick)]
-    if kicks:
+    if kicks and scene.spec.soft is None:
         kicks[0]._runner = _Kicks(scene, kicks)
     return effects

@@ -26,6 +26,7 @@ point before and after the step. The ledger uses that identity term by term:
   and minus gravity's moment; times the rotor's angular velocity (its mean over the step when
   driven). This is the moment equation, not the energy equation, so the closure remains an
   independent check. The co-rotating floor's work comes from its own kicks.
+  Hammers hitting their swing stops add what the stops removed (``effects.SwingStops``).
 * ``friction``, ``drag``: what the effects removed (:mod:`perga.engine.effects`).
 * ``gravity_work``: the potential energy released by in-plane gravity, Σ m g·Δr_cg.
 * ``closure`` = (drive_work + gravity_work − ΔKE − contact_dissipation − friction − drag) /
@@ -112,7 +113,54 @@ class EnergyLedger:
     drag: float
     """Energy removed by air drag."""
     closure: float
-    """(drive + gravity − ΔKE − contact − friction − drag) / energy scale (module doc)."""
+    """(drive + gravity − ΔKE − Δelastic − contact − friction − drag) / energy scale (module
+    doc)."""
+    elastic: float = 0.0
+    """Energy stored in soft contacts now (0 with rigid contacts)."""
+    elastic_initial: float = 0.0
+    """Energy stored in soft contacts at t = 0."""
+
+
+@dataclass(frozen=True)
+class LedgerTerms:
+    """The measured terms of a ledger before closing it (J): see :class:`EnergyLedger`;
+    ``moved`` is ½Σ_i|ΔKE_i|, the kinetic energy moved between bodies."""
+
+    kinetic: float
+    kinetic_initial: float
+    moved: float
+    drive_work: float
+    gravity_work: float
+    contact_dissipation: float
+    friction: float
+    drag: float
+    elastic: float = 0.0
+    elastic_initial: float = 0.0
+
+    def close(self) -> EnergyLedger:
+        """The ledger with its closure (module doc)."""
+        change = self.kinetic - self.kinetic_initial + self.elastic - self.elastic_initial
+        residual = (
+            self.drive_work
+            + self.gravity_work
+            - change
+            - self.contact_dissipation
+            - self.friction
+            - self.drag
+        )
+        scale = max(abs(self.drive_work), abs(change), abs(self.gravity_work), self.moved, TINY)
+        return EnergyLedger(
+            kinetic=self.kinetic,
+            kinetic_initial=self.kinetic_initial,
+            drive_work=self.drive_work,
+            gravity_work=self.gravity_work,
+            contact_dissipation=self.contact_dissipation,
+            friction=self.friction,
+            drag=self.drag,
+            closure=residual / scale,
+            elastic=self.elastic,
+            elastic_initial=self.elastic_initial,
+        )
 
 
 def _kinetic(body: pymunk.Body) -> float:
@@ -278,36 +326,38 @@ class EnergyMeter:
 
     # --- the ledger ------------------------------------------------------------------------
 
-    def ledger(self) -> EnergyLedger:
-        """The cumulative terms now, in J."""
+    def add_moment(self, angular_impulse: float) -> None:
+        """Add an external angular impulse about the axis on the rotor-driven bodies in this
+        step (internal units), e.g. soft granules' loads on hinged hammers: call it between
+        :meth:`before_step` and :meth:`after_step`."""
+        self._moment += angular_impulse
+
+    def terms(self) -> LedgerTerms:
+        """The cumulative terms of the Pymunk bodies and the effects now, in J."""
         gravity = self._space.gravity
         kinetics = [_kinetic(b) for b in self._bodies]
-        kinetic, kinetic0 = sum(kinetics) * u.ENERGY, sum(self._kinetics0) * u.ENERGY
-        moved = 0.5 * sum(abs(k - k0) for k, k0 in zip(kinetics, self._kinetics0, strict=True))
-        gravity_work = (
-            sum(
-                b.mass * gravity.dot(_centre(b) - r0)
-                for b, r0 in zip(self._bodies, self._centres0, strict=True)
-            )
-            * u.ENERGY
-        )
-        terms = {"friction": 0.0, "drag": 0.0, "drive": 0.0}
+        terms = {"friction": 0.0, "drag": 0.0, "drive": 0.0, "contact": 0.0}
         supplied = 0.0
         for effect in self._scene.effects:
             terms[effect.term] += effect.removed
             supplied += effect.supplied
-        drive = self._drive * u.ENERGY + supplied
-        contact = self._contact * u.ENERGY
-        change = kinetic - kinetic0
-        residual = drive + gravity_work - change - contact - terms["friction"] - terms["drag"]
-        scale = max(abs(drive), abs(change), abs(gravity_work), moved * u.ENERGY, TINY)
-        return EnergyLedger(
-            kinetic=kinetic,
-            kinetic_initial=kinetic0,
-            drive_work=drive,
-            gravity_work=gravity_work,
-            contact_dissipation=contact,
+        return LedgerTerms(
+            kinetic=sum(kinetics) * u.ENERGY,
+            kinetic_initial=sum(self._kinetics0) * u.ENERGY,
+            moved=0.5
+            * sum(abs(k - k0) for k, k0 in zip(kinetics, self._kinetics0, strict=True))
+            * u.ENERGY,
+            drive_work=self._drive * u.ENERGY + supplied,
+            gravity_work=sum(
+                b.mass * gravity.dot(_centre(b) - r0)
+                for b, r0 in zip(self._bodies, self._centres0, strict=True)
+            )
+            * u.ENERGY,
+            contact_dissipation=self._contact * u.ENERGY + terms["contact"],
             friction=terms["friction"],
             drag=terms["drag"],
-            closure=residual / scale,
         )
+
+    def ledger(self) -> EnergyLedger:
+        """The cumulative terms now, in J, and their closure."""
+        return self.terms().close()

@@ -3,16 +3,17 @@
 Plate hammers become rectangles in the hammer frame (hinge at the origin, axis +x), spaced
 evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
 (:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
-listed in the case, and only those, become the scene's effects.
+listed in the case, and only those, become the scene's effects; a soft contact model gets its
+stiffness and steps from :mod:`perga.case.timestep`.
 """
 
 from __future__ import annotations
 
 import math
 
-from perga.case.checks import resolved_time_step
 from perga.case.placement import initial_state
 from perga.case.schema import Case
+from perga.case.timestep import normal_stiffness, step_plan
 from perga.engine.spec import (
     AirDragSpec,
     ChamberSpec,
@@ -24,6 +25,7 @@ from perga.engine.spec import (
     HammerSpec,
     RotorSpec,
     SceneSpec,
+    SoftContactSpec,
 )
 
 
@@ -44,6 +46,7 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
             mount=h.mount,
             material=h.material,
             swing_angle=h.swing_angle,
+            swing_limit=h.swing_limit,
             velocity=h.velocity,
         )
         for angle in angles
@@ -86,6 +89,20 @@ def _effects(case: Case) -> EffectsSpec:
     )
 
 
+def _soft(case: Case) -> SoftContactSpec | None:
+    cm = case.contact_model
+    if cm.kind == "rigid":
+        return None
+    return SoftContactSpec(
+        model=cm.kind,
+        stiffness=normal_stiffness(case),
+        tangential_ratio=cm.tangential_ratio,
+        rolling=cm.rolling,
+        end=cm.end,
+        substeps=cm.granule_substeps,
+    )
+
+
 def scene_spec(case: Case) -> SceneSpec:
     """The engine's description of a validated case (raises ValueError without a placement or
     a chamber: a simulation needs both)."""
@@ -108,7 +125,7 @@ def scene_spec(case: Case) -> SceneSpec:
         hammers=hammers,
         granules=granules,
         contacts=contacts,
-        dt=resolved_time_step(case) / case.solver.substeps,
+        dt=step_plan(case).granule,
         iterations=case.solver.iterations,
         gravity=gravity,
         granule_collisions=case.effects.granule_collisions is not None,
@@ -116,4 +133,5 @@ def scene_spec(case: Case) -> SceneSpec:
             case.chamber.radius, case.chamber.wall_thickness, case.chamber.material
         ),
         effects=_effects(case),
+        soft=_soft(case),
     )

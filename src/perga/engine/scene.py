@@ -8,7 +8,8 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
 
   - ``hinged``: a dynamic body whose local origin is the hinge, with mass, centre of gravity
     and the moment about the centre of mass I_C = I_A − M|c|² from the spec, pinned to the
-    rotor by a ``PivotJoint`` at the hinge. It starts co-rotating with the rotor.
+    rotor by a ``PivotJoint`` at the hinge. It starts co-rotating with the rotor. With
+    ``swing_limit`` a ``RotaryLimitJoint`` to the rotor stops it at α = ±swing_limit.
   - ``welded``: the hammer's polygon is attached to the rotor body itself (its outline
     transformed into the rotor frame). At constant ω this is exactly rigid (no joint error,
     no solver iterations), and the hammer's mass properties are irrelevant because the
@@ -17,10 +18,13 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
     validation scenes such as a free two-body impact).
 
 * Granules: dynamic bodies with one ``Circle`` each; moment m r²/2 or ``inf`` (sliding point).
-* Chamber (optional): ``segments`` convex quadrilaterals on the space's static body, each
-  ``wall_thickness`` thick, whose inner faces are tangent to the circle of the inner radius
-  (the inner outline is the circumscribed polygon: at most R(1/cos(π/N) − 1) outside the
-  circle, 8e-5 m for R = 0.15 m, N = 96). They share the hammers' filter group.
+  With soft contacts (``spec.soft``) there are none: granules and the chamber wall are arrays
+  of :mod:`perga.soft`, stepped by :class:`~perga.engine.soft_simulation.SoftSimulation`;
+  Pymunk then holds only the rotor and the hammers.
+* Chamber (optional, rigid contacts only): ``segments`` convex quadrilaterals on the space's
+  static body, each ``wall_thickness`` thick, whose inner faces are tangent to the circle of
+  the inner radius (the inner outline is the circumscribed polygon: at most R(1/cos(π/N) − 1)
+  outside the circle, 8e-5 m for R = 0.15 m, N = 96). They share the hammers' filter group.
 * Effects: :mod:`perga.engine.effects` builds exactly the effects the spec lists, after
   everything else (the drive turns the rotor into a dynamic body).
 * Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Each material gets
@@ -47,7 +51,7 @@ from typing import Any, Literal
 import pymunk
 
 from perga.engine import units as u
-from perga.engine.effects import Effect, build_effects
+from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.engine.spec import ChamberSpec, GranuleSpec, HammerSpec, SceneSpec
 
 Kind = Literal["granule", "hammer", "wall"]
@@ -215,6 +219,7 @@ def build_scene(spec: SceneSpec) -> Scene:
     hammer_bodies: list[pymunk.Body] = []
     hammer_shapes: list[pymunk.Poly] = []
     joints: list[pymunk.Constraint] = []
+    stops: list[pymunk.RotaryLimitJoint] = []
     for index, h in enumerate(spec.hammers):
         shape, body, joint = _build_hammer(h, rotor, omega)
         if body is not rotor:
@@ -223,6 +228,9 @@ def build_scene(spec: SceneSpec) -> Scene:
         if joint is not None:
             space.add(joint)
             joints.append(joint)
+            if h.swing_limit is not None:
+                stops.append(_build_stops(h, rotor, body))
+                space.add(stops[-1])
         hammer_bodies.append(body)
         hammer_shapes.append(shape)
         shape_owner[shape] = ("hammer", index)
@@ -230,7 +238,8 @@ def build_scene(spec: SceneSpec) -> Scene:
     granule_bodies: list[pymunk.Body] = []
     granule_shapes: list[pymunk.Circle] = []
     granule_group = 0 if spec.granule_collisions else GRANULE_GROUP
-    for index, g in enumerate(spec.granules):
+    rigid = spec.soft is None  # soft granules and their wall live in perga.soft, not here
+    for index, g in enumerate(spec.granules if rigid else ()):
         body, shape = _build_granule(g)
         space.add(body)
         add_shape(shape, "granule", g.material, granule_group)
@@ -239,7 +248,7 @@ def build_scene(spec: SceneSpec) -> Scene:
         shape_owner[shape] = ("granule", index)
 
     wall_shapes: list[pymunk.Poly] = []
-    if spec.chamber is not None:
+    if spec.chamber is not None and rigid:
         for shape in _build_chamber(spec.chamber, space.static_body):
             add_shape(shape, "wall", spec.chamber.material, HAMMER_GROUP)
             wall_shapes.append(shape)
@@ -271,6 +280,8 @@ def build_scene(spec: SceneSpec) -> Scene:
                 type_a, type_b, "pre_solve", _pair_setter(contact.restitution, contact.friction)
             )
     scene.effects = build_effects(scene)
+    if stops:
+        scene.effects.append(SwingStops(stops))
     return scene
 
 
@@ -306,6 +317,17 @@ def _build_hammer(
     joint = pymunk.PivotJoint(rotor, body, hinge, (0.0, 0.0))
     joint.collide_bodies = False
     return shape, body, joint
+
+
+def _build_stops(h: HammerSpec, rotor: pymunk.Body, body: pymunk.Body) -> pymunk.RotaryLimitJoint:
+    """Stops holding a hinged hammer's α in [−swing_limit, swing_limit]: the hammer's angle
+    relative to the rotor is angle_on_rotor + α."""
+    assert h.swing_limit is not None
+    stops = pymunk.RotaryLimitJoint(
+        rotor, body, h.angle_on_rotor - h.swing_limit, h.angle_on_rotor + h.swing_limit
+    )
+    stops.collide_bodies = False
+    return stops
 
 
 def _build_granule(g: GranuleSpec) -> tuple[pymunk.Body, pymunk.Circle]:

@@ -98,6 +98,20 @@ def _granule_energy(body: pymunk.Body) -> float:
     return 0.5 * body.mass * body.velocity.length_squared + spin
 
 
+def hammer_energy(scene: Scene, index: int) -> float:
+    """½Mv_c² + ½I_cΩ² of hammer ``index`` now, J (welded ones: moving with the rotor)."""
+    spec = scene.spec.hammers[index]
+    body, shape = scene.hammer_bodies[index], scene.hammer_shapes[index]
+    centre = (
+        _welded_com(spec, shape)
+        if body is scene.rotor
+        else body.local_to_world(body.center_of_gravity)
+    )
+    v = body.velocity_at_world_point(centre) * u.VELOCITY
+    spin = body.angular_velocity * u.ANGULAR_VELOCITY
+    return 0.5 * spec.mass * v.length_squared + 0.5 * spec.moment_about_centre * spin**2
+
+
 class ImpactRecorder:
     """Records the first step of every granule-hammer contact as an :class:`Impact`."""
 
@@ -115,32 +129,18 @@ class ImpactRecorder:
         granule_shape, hammer_shape = arbiter.shapes
         return self._owner[granule_shape][1], self._owner[hammer_shape][1]
 
-    def _hammer_energy(self, index: int) -> float:
-        """½Mv_c² + ½I_cΩ² of hammer ``index`` (internal units), welded ones included."""
-        spec = self._scene.spec.hammers[index]
-        body, shape = self._scene.hammer_bodies[index], self._scene.hammer_shapes[index]
-        centre = (
-            _welded_com(spec, shape)
-            if body is self._scene.rotor
-            else body.local_to_world(body.center_of_gravity)
-        )
-        mass = u.to_internal(spec.mass, u.MASS)
-        moment = u.to_internal(spec.moment_about_centre, u.MOMENT)
-        v = body.velocity_at_world_point(centre)
-        return 0.5 * mass * v.length_squared + 0.5 * moment * body.angular_velocity**2
-
     def _begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         key = self._key(arbiter)
         relative, _, _ = _contact(arbiter)
         granule_energy = _granule_energy(arbiter.shapes[0].body)
-        self._pending[key] = (relative, granule_energy, self._hammer_energy(key[1]))
+        self._pending[key] = (relative, granule_energy, hammer_energy(self._scene, key[1]))
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         key = self._key(arbiter)
         pending = self._pending.pop(key, None)
         if pending is None:
             return
-        before, granule_energy, hammer_energy = pending
+        before, granule_energy, hammer_energy_before = pending
         after, point, n = _contact(arbiter)
         t = n.perpendicular()
         # measured: total_impulse is the impulse on the first shape's body (the granule)
@@ -161,7 +161,7 @@ class ImpactRecorder:
                 granule_energy_gain=(_granule_energy(arbiter.shapes[0].body) - granule_energy)
                 * joule,
                 dissipated=-impulse.dot((before + after) * 0.5) * joule,
-                hammer_energy_before=hammer_energy * joule,
+                hammer_energy_before=hammer_energy_before,
             )
         )
 

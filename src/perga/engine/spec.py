@@ -84,6 +84,7 @@ class HammerSpec:
     'free' (no attachment; for validation scenes: the hammer then moves with ``velocity``);
     material: name looked up in the scene's contact table;
     swing_angle: initial α, rad (hinged/free only; the hammer starts co-rotating with the rotor);
+    swing_limit: stops at α = ±swing_limit, rad ('hinged' only; None: no stops);
     velocity: initial centre-of-mass velocity, m/s ('free' only);
     angular_velocity: initial angular velocity, rad/s ('free' only).
     """
@@ -97,6 +98,7 @@ class HammerSpec:
     mount: Mount
     material: str
     swing_angle: float = 0.0
+    swing_limit: float | None = None
     velocity: Vec2 = (0.0, 0.0)
     angular_velocity: float = 0.0
 
@@ -130,6 +132,15 @@ class HammerSpec:
             problems.append(f"mount must be 'hinged', 'welded' or 'free' (got {self.mount!r})")
         if self.mount != "free" and (self.velocity != (0.0, 0.0) or self.angular_velocity != 0.0):
             problems.append("velocity and angular_velocity are only for mount 'free'")
+        if self.swing_limit is not None and not (
+            self.mount == "hinged"
+            and 0 < self.swing_limit <= math.pi
+            and abs(self.swing_angle) <= self.swing_limit
+        ):
+            problems.append(
+                "swing_limit must be in (0, π] rad, for a hinged hammer, with |swing_angle| "
+                f"within it (got {self.swing_limit} for {self.mount!r}, α = {self.swing_angle})"
+            )
         if not self.material:
             problems.append("material must be a non-empty name")
         _raise("hammer", problems)
@@ -322,12 +333,48 @@ class EffectsSpec:
 
 
 @dataclass(frozen=True)
+class SoftContactSpec:
+    """Soft granule contacts (:mod:`perga.soft`) instead of Pymunk impulses.
+
+    model: 'linear' (k_n in N/m) or 'hertz' (k_n = (4/3)E* in Pa; contact stiffness
+    k_n·√R_eff); tangential_ratio: k_t/k_n; rolling: rolling-resistance coefficient μ_r;
+    end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
+    ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1). Damping per pair comes from
+    the pair's restitution, friction from the pair's friction.
+    """
+
+    model: Literal["linear", "hertz"]
+    stiffness: float
+    tangential_ratio: float = 2.0 / 7.0
+    rolling: float = 0.0
+    end: Literal["force", "overlap"] = "force"
+    substeps: int = 1
+
+    def __post_init__(self) -> None:
+        problems: list[str] = []
+        if self.model not in ("linear", "hertz"):
+            problems.append(f"model must be 'linear' or 'hertz' (got {self.model!r})")
+        _positive(problems, "stiffness", self.stiffness, "N/m or Pa")
+        for name in ("tangential_ratio", "rolling"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                problems.append(f"{name} must be finite and >= 0 (got {value})")
+        if self.end not in ("force", "overlap"):
+            problems.append(f"end must be 'force' or 'overlap' (got {self.end!r})")
+        if not (isinstance(self.substeps, int) and self.substeps >= 1):
+            problems.append(f"substeps must be an integer >= 1 (got {self.substeps!r})")
+        _raise("soft contacts", problems)
+
+
+@dataclass(frozen=True)
 class SceneSpec:
     """Everything the engine builds a scene from.
 
-    dt: time step, s (> 0); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
+    dt: time step, s (> 0): Pymunk's, or with ``soft`` the granules' (Pymunk then steps
+    dt·soft.substeps); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
     gravity, m/s² (zero for a horizontal rotor); granule_collisions: whether granules collide
-    with each other; chamber: the round wall, or None; effects: optional physics. Every
+    with each other; chamber: the round wall, or None; effects: optional physics; soft: soft
+    granule contacts (:class:`SoftContactSpec`), or None for Pymunk's impulses. Every
     material pair that can touch must be in ``contacts`` exactly once. Hammers never collide
     with each other, with the rotor or with the chamber wall.
     """
@@ -342,6 +389,7 @@ class SceneSpec:
     granule_collisions: bool = False
     chamber: ChamberSpec | None = None
     effects: EffectsSpec = EffectsSpec()
+    soft: SoftContactSpec | None = None
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -377,6 +425,11 @@ class SceneSpec:
         if self.chamber is not None:
             pairs |= {frozenset((g, self.chamber.material)) for g in granule_materials}
         return pairs
+
+    @property
+    def machine_dt(self) -> float:
+        """Pymunk's step of rotor and hammers, s: dt, or dt·soft.substeps with soft contacts."""
+        return self.dt * (self.soft.substeps if self.soft else 1)
 
     def contact(self, material_a: str, material_b: str) -> ContactSpec:
         """The contact parameters of a material pair (order does not matter)."""

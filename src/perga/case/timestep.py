@@ -1,0 +1,165 @@
+"""The time steps of a case: contact resolution, tunnelling and rotor-turn bounds, resolved.
+
+Rigid contacts (Pymunk impulses) have no duration: the step is bounded by tunnelling (a granule
+must not cross half a hammer or the wall in one step) and by the rotor's turn per step. Soft
+contacts (``contact_model.kind`` 'linear' or 'hertz') also need the shortest contact resolved by
+``steps_per_contact`` steps (default 50, MercuryDPM convention); their granules take
+``granule_substeps`` steps per Pymunk step of the rotor and hammers. The normal stiffness of the
+soft contacts is resolved here too, since the contact durations follow from it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_time_step
+from perga.case.schema import Case, ExplicitPlacement
+
+MAX_ROTATION_PER_STEP = 0.05
+"""Largest rotor turn in one (Pymunk) step, rad (about 3°): hinge and contact geometry stay
+resolved."""
+
+
+def fastest_relative_speed(case: Case) -> float:
+    """Upper bound on a granule's speed relative to a hammer or the wall, m/s: the hammer tip's
+    speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed."""
+    h = case.hammers
+    tip = h.hinge_radius + h.shape.length - h.shape.hinge_offset
+    speed = case.rotor.angular_velocity * tip + math.hypot(*h.velocity)
+    placement = case.granules.placement
+    if isinstance(placement, ExplicitPlacement) and placement.velocities:
+        speed += float(np.max(np.hypot(*np.array(placement.velocities, dtype=float).T)))
+    return speed
+
+
+def thinnest_obstacle(case: Case) -> float:
+    """The thinner of a hammer plate and the chamber wall, m."""
+    hammer = case.hammer_plate.thickness
+    return min(hammer, case.chamber.wall_thickness) if case.chamber else hammer
+
+
+def hammer_effective_mass(case: Case) -> float:
+    """Smallest effective mass a hammer offers a granule's impact, kg: I_A/reach² for a hinged
+    hammer struck at its tip, M/(1 + M(L/2)²/I_C) for a free one struck at an end, and infinite
+    for a welded one (the rotor's inertia)."""
+    h, plate = case.hammers, case.hammer_plate
+    if h.mount == "hinged":
+        return plate.inertia_about_hinge / plate.tip_distance**2
+    if h.mount == "free":
+        arm = 0.5 * math.hypot(plate.length, plate.width)
+        return plate.mass / (1.0 + plate.mass * arm**2 / plate.inertia_about_centre)
+    return math.inf
+
+
+def _pairs(case: Case) -> list[tuple[str, float, float]]:
+    """(name, reduced mass kg, effective radius m) of each soft contact kind the scene has."""
+    m, r = case.granule_mass, case.granules.radius
+    hammer = hammer_effective_mass(case)
+    pairs = [("granule-hammer", m if math.isinf(hammer) else m * hammer / (m + hammer), r)]
+    if case.chamber is not None:
+        pairs.append(("granule-wall", m, r))
+    if case.effects.granule_collisions is not None:
+        pairs.append(("granule-granule", 0.5 * m, 0.5 * r))
+    return pairs
+
+
+def _pair_restitution(case: Case, name: str) -> float:
+    other = {
+        "granule-hammer": case.hammers.material,
+        "granule-wall": case.chamber.material if case.chamber else "",
+        "granule-granule": case.granules.material,
+    }[name]
+    return case.contact(case.granules.material, other).restitution
+
+
+def normal_stiffness(case: Case) -> float:
+    """k_n of the soft contacts: contact_model.stiffness (N/m linear, Pa Hertz), or for a
+    linear model given by duration the k that makes a granule striking a rigid wall with the
+    granule-hammer restitution last that long, N/m."""
+    cm = case.contact_model
+    if cm.stiffness is not None:
+        return cm.stiffness
+    if cm.duration is None:
+        raise ValueError("contact_model: rigid contacts have no stiffness")
+    e = case.granule_hammer_contact.restitution
+    return LinearSpringDashpot.from_duration(cm.duration, e, case.granule_mass, cm.end).k
+
+
+def contact_durations(case: Case) -> dict[str, float]:
+    """Head-on contact duration of each soft contact kind (granule-hammer, -wall, -granule), s.
+
+    Linear: independent of speed; Hertz (contact stiffness k_n √R_eff): at the fastest relative
+    speed, where it is shortest. Raises ValueError for a restitution the contact model cannot
+    reach (e ≤ e⁻² with end = 'force').
+    """
+    cm = case.contact_model
+    k_n = normal_stiffness(case)
+    v = max(fastest_relative_speed(case), 1e-3)
+    out = {}
+    for name, m_eff, r_eff in _pairs(case):
+        e = _pair_restitution(case, name)
+        if cm.kind == "linear":
+            out[name] = LinearSpringDashpot.from_stiffness(k_n, e, m_eff, cm.end).duration
+        else:
+            contact = HertzTsuji.from_restitution(k_n * math.sqrt(r_eff), e, m_eff, cm.end)
+            out[name] = contact.impact(v).duration
+    return out
+
+
+@dataclass(frozen=True)
+class StepPlan:
+    """The resolved steps of a case, s.
+
+    granule: the step of the granules (soft: perga's kernel; rigid: the Pymunk step);
+    machine: the Pymunk step of rotor and hammers (soft: granule·granule_substeps; rigid: the
+    same as granule, solver.dt/solver.substeps); contact_duration: the shortest soft contact
+    (inf for rigid); tunnelling: the tunnelling bound 0.5(r + t/2)/v_rel; rotation: the step turning
+    the rotor by MAX_ROTATION_PER_STEP; governed_by: what set an automatic step ('given' for a
+    step from solver.dt).
+    """
+
+    granule: float
+    machine: float
+    contact_duration: float
+    tunnelling: float
+    rotation: float
+    governed_by: Literal["given", "contact", "tunnelling", "rotation"]
+
+
+def step_plan(case: Case) -> StepPlan:
+    """Resolve solver.dt ('auto' or given) into the granule and machine steps of the case.
+
+    'auto' takes the smallest of t_c/steps_per_contact (soft only), half the tunnelling bound,
+    and the rotor-turn bound (per machine step: divided by granule_substeps for soft contacts);
+    a rigid step is then divided by solver.substeps (soft contacts take solver.substeps = 1).
+    """
+    cm, solver = case.contact_model, case.solver
+    t_c = min(contact_durations(case).values()) if cm.soft else math.inf
+    tunnelling = tunnelling_time_step(
+        case.granules.radius, thinnest_obstacle(case), fastest_relative_speed(case)
+    )
+    substeps = cm.granule_substeps if cm.soft else 1
+    rotation = MAX_ROTATION_PER_STEP / case.rotor.angular_velocity / substeps
+    if solver.dt != "auto":
+        step, governed_by = solver.dt, "given"
+    else:
+        bounds = {
+            "contact": t_c / cm.steps_per_contact,
+            "tunnelling": 0.5 * tunnelling,
+            "rotation": rotation,
+        }
+        governed_by = min(bounds, key=bounds.__getitem__)
+        step = bounds[governed_by]
+    granule = step if cm.soft else step / solver.substeps
+    return StepPlan(
+        granule=granule,
+        machine=granule * substeps,
+        contact_duration=t_c,
+        tunnelling=tunnelling,
+        rotation=rotation * substeps,
+        governed_by=governed_by,  # type: ignore[arg-type]
+    )

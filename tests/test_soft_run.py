@@ -1,0 +1,85 @@
+"""perga run with soft contacts: a granule struck by a Pymunk hammer through the whole stack.
+
+The bundled soft single-granule case (a 0.16 g granule, one hinged plate hammer at 600 rpm),
+varied: the restitution measured from impacts.csv (−v_n after / v_n before, relative to the
+hammer's material point) must equal the pair's e within 0.5 % (the issue's tolerance) at the
+automatic step, and the energy ledger must close.
+"""
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from perga.case import load_case
+from perga.runner import prepare_directory, run_case
+
+ROOT = Path(__file__).resolve().parents[1]
+SOFT = ROOT / "cases" / "soft-single-granule.toml"
+
+
+def soft_run(tmp_path: Path, *, replace: dict[str, str] | None = None, duration: float = 0.03):
+    """Run the soft single-granule case, changed by ``replace`` (text -> text); returns the
+    summary and the impacts table."""
+    text = SOFT.read_text().replace("duration = 0.2", f"duration = {duration}")
+    for old, new in (replace or {}).items():
+        assert old in text, old
+        text = text.replace(old, new)
+    path = tmp_path / "case.toml"
+    path.write_text(text)
+    out = tmp_path / "run"
+    prepare_directory(out, overwrite=True)
+    run_case(load_case(path), path, out)
+    with (out / "impacts.csv").open() as f:
+        impacts = list(csv.DictReader(f))
+    return json.loads((out / "summary.json").read_text()), impacts
+
+
+def restitution(impact: dict[str, str]) -> float:
+    return -float(impact["normal_velocity_after"]) / float(impact["normal_velocity_before"])
+
+
+@pytest.mark.parametrize("mass", [0.005, 0.02826, 0.2])
+@pytest.mark.parametrize("e", [0.5, 0.7, 0.9])
+def test_restitution_on_a_hinged_hammer_at_the_default_step(tmp_path, mass, e):
+    """One granule step per Pymunk step (the default): measured within 0.1 % for 5 g and 200 g."""
+    summary, impacts = soft_run(
+        tmp_path,
+        replace={
+            "mass = 0.02826": f"mass = {mass}",
+            "restitution = 0.7": f"restitution = {e}",
+            "granule_substeps = 2": "granule_substeps = 1",
+        },
+    )
+    assert summary["status"] == "completed"
+    assert impacts, "the hammer must strike the granule within 30 ms"
+    assert restitution(impacts[0]) == pytest.approx(e, rel=0.005)
+    assert abs(summary["energy"]["closure"]) < 0.005
+
+
+@pytest.mark.parametrize(("mass", "substeps", "tolerance"), [(0.2, 10, 0.005), (0.005, 2, 0.005)])
+def test_granule_substeps_where_they_pay(tmp_path, mass, substeps, tolerance):
+    """During the substeps of one Pymunk step a hammer keeps its velocity: harmless for a heavy
+    hammer, not for a light one. Measured e errors (e = 0.5 and 0.9): 200 g hammer ≤ 0.1 % up to
+    10 substeps; 5 g hammer −0.08 %, +0.12 %, +0.51 %, +1.06 % at 1, 2, 5, 10 substeps
+    (docs/validation.md). Asserted: the issue's 0.5 % where substeps are recommended."""
+    _, impacts = soft_run(
+        tmp_path,
+        replace={
+            "mass = 0.02826": f"mass = {mass}",
+            "restitution = 0.7": "restitution = 0.9",
+            "granule_substeps = 2": f"granule_substeps = {substeps}",
+        },
+    )
+    assert restitution(impacts[0]) == pytest.approx(0.9, rel=tolerance)
+
+
+def test_hertz_contacts(tmp_path):
+    summary, impacts = soft_run(
+        tmp_path,
+        replace={'kind = "linear"\nduration = 1e-4': 'kind = "hertz"\nstiffness = 1e8'},
+    )
+    assert summary["time_step"]["contact_model"] == "hertz"
+    assert restitution(impacts[0]) == pytest.approx(0.7, rel=0.005)
+    assert abs(summary["energy"]["closure"]) < 0.005
