@@ -40,6 +40,9 @@ def test_run_writes_tables_and_summary(tmp_path):
     assert times[:5] == pytest.approx([0.0, 0.005, 0.010, 0.015, 0.020], abs=summary["dt"])
     assert summary["frames"] == len(times)
     assert (out / "case.toml").read_text() == case_path.read_text()
+    for table in ("granules.csv", "hammers.csv", "impacts.csv", "energy.csv"):
+        for row in read(out / table):  # every value a plain number (no "np.float64(...)")
+            assert all(float(value) == float(value) for value in row.values())
 
 
 def test_refuses_to_overwrite_without_the_flag(tmp_path, capsys):

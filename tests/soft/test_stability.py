@@ -129,3 +129,25 @@ def test_default_step_is_fiftieth_of_shortest_contact():
     m_min = g.m.min()
     assert g.t_c == pytest.approx(contact_duration(g.params[0, 0], 0.5 * m_min, 0.0), rel=1e-12)
     assert g.dt == pytest.approx(g.t_c / 50.0, rel=1e-12)
+
+
+def test_without_pairs_granules_pass_through_each_other():
+    """pairs=False (a scene without granule collisions): no pair force, no pair list; the walls
+    still act."""
+    row = contact_parameters("linear", 0.7, k_n=1e6, friction=0.5)
+    g = SoftGranules(
+        [[-0.01, 0.0], [0.01, 0.0]],
+        [RADIUS, RADIUS],
+        [MASS, MASS],
+        uniform_table(row),
+        v=[[1.0, 0.0], [-1.0, 0.0]],
+        walls=[chamber(R_CHAMBER)],
+        pairs=False,
+    )
+    n = round(0.02 / g.dt)  # about 20 mm each: they cross at t = 10 ms
+    g.step(n)
+    travel = n * g.dt
+    assert g.x[:, 0] == pytest.approx([-0.01 + travel, 0.01 - travel], abs=1e-12)
+    assert g.v[:, 0] == pytest.approx([1.0, -1.0], abs=0)
+    assert g.nbr.size == 0 and g.dissipated[0] == 0.0
+    assert g.contact_energy() == 0.0

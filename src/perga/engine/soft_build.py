@@ -117,4 +117,5 @@ def soft_granules(
         polygons=polygons,
         polygon_table=polygon_table(spec, materials, hammer_materials),
         threads=None if len(g) >= THREADED_FROM else 1,
+        pairs=spec.granule_collisions,
     )

@@ -28,7 +28,9 @@ class Table:
                 raise ValueError(
                     f"{self.path.name}: row of {len(row)} values, header has {len(self.columns)}"
                 )
-            self._writer.writerow([repr(v) if isinstance(v, float) else v for v in row])
+            # repr of a Python float round-trips; numpy scalars (float subclasses) would write
+            # "np.float64(...)"
+            self._writer.writerow([repr(float(v)) if isinstance(v, float) else v for v in row])
             self.rows += 1
         self._file.flush()
 

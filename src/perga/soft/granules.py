@@ -54,6 +54,8 @@ class SoftGranules:
     m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's).
     polygons, polygon_table: convex rigid bodies (hammers) and the granule-polygon contact table
     (``perga.soft.polygons``), both or neither; the granules' ``mat`` indexes the table's rows.
+    pairs: False leaves granule-granule contacts out entirely (no neighbour list, no pair loop:
+    granules pass through each other, as in a scene without granule collisions).
 
     The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
     moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
@@ -82,6 +84,7 @@ class SoftGranules:
         threads: int | None = None,
         polygons: pg.PolygonSet | None = None,
         polygon_table: pg.ContactTable | None = None,
+        pairs: bool = True,
     ) -> None:
         self.x = _f64(x, np.shape(x))
         n = self.x.shape[0]
@@ -133,6 +136,7 @@ class SoftGranules:
         self.start, self.nbr, self.hist = empty_list(n)
         self.x_ref = self.x.copy()
         self._rebuild = True
+        self.pairs = bool(pairs)
         self.time = 0.0
         self.n_rebuilds = 0
 
@@ -265,6 +269,7 @@ class SoftGranules:
                 float(v_cap),
                 self._rebuild,
                 self.dissipated,
+                self.pairs,
             )
         finally:
             numba.set_num_threads(previous)
@@ -279,12 +284,15 @@ class SoftGranules:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(i, j, overlap, list entry) of the granule pairs overlapping now (δ > 0), with
         ``springs`` also those holding a tangential spring."""
-        if self._rebuild:
+        if self._rebuild and self.pairs:
             self.start, self.nbr, self.hist = build(
                 self.x, self.r, self.skin, self.start, self.nbr, self.hist
             )
             self.x_ref[:] = self.x
             self._rebuild = False
+        if not self.pairs or self.start.shape[0] != self.n + 1:
+            e = np.empty(0, np.int64)
+            return e, e, np.empty(0), e
         counts = np.diff(self.start)
         i = np.repeat(np.arange(self.n), counts)
         j = self.nbr

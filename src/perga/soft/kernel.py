@@ -345,8 +345,12 @@ def advance(
     v_cap,
     rebuild,
     dissipated,
+    pairs,
 ):
     """Advance n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds).
+
+    pairs: False skips granule-granule contacts (no pair list built, no pair loop; acc must
+    then hold zeros, as ``new_accumulator`` makes it).
 
     Rebuilds the neighbour list (carrying the tangential history over) before a step when
     2·(largest displacement since the last build) + dt·(largest speed) exceeds the skin (the
@@ -375,11 +379,12 @@ def advance(
     cpoly = np.zeros(0, np.int64)
     ploads = np.zeros((0, 4))
     n_rebuilds = 0
-    need = rebuild or start.shape[0] != n + 1 or _stale(x, v, x_ref, skin, dt)
+    need = rebuild or (pairs and start.shape[0] != n + 1) or _stale(x, v, x_ref, skin, dt)
     fresh = False
     for step in range(n_steps):
         if need:
-            start, nbr, hist = build(x, r, skin, start, nbr, hist)
+            if pairs:
+                start, nbr, hist = build(x, r, skin, start, nbr, hist)
             x_ref[:, :] = x
             n_rebuilds += 1
             fresh = False
@@ -391,7 +396,10 @@ def advance(
                 cstart, cpoly = pg.candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 ploads = np.zeros((cpoly.shape[0], 4))
                 fresh = True
-        pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost)
+        if pairs:
+            pair_forces(
+                x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost
+            )
         _integrate(
             x,
             v,
