@@ -165,14 +165,18 @@ def soft_engine(make: Callable[[], SoftGranules], threads: int, warm: int, steps
         before = g.n_rebuilds
         t0 = time.perf_counter()
         g.step(steps)
-        seconds = time.perf_counter() - t0
-        rebuilds = g.n_rebuilds - before
-        share = rebuilds * neighbour_build_seconds(g, threads) / seconds
-        state = {"x": g.x.copy(), "v": g.v.copy(), "w": g.w.copy()}
-        return Result(seconds, steps, rebuilds, share, state)
+        return _soft_result(g, threads, steps, before, time.perf_counter() - t0)
 
     name = f"perga soft, {threads} thread{'s' if threads > 1 else ''}"
     return Engine(name, probe.n, probe.dt, run)
+
+
+def _soft_result(g: SoftGranules, threads: int, steps: int, before: int, seconds: float) -> Result:
+    """A timed soft run's result: rebuilds since ``before`` and their share of the time, state."""
+    rebuilds = g.n_rebuilds - before
+    share = rebuilds * neighbour_build_seconds(g, threads) / seconds
+    state = {"x": g.x.copy(), "v": g.v.copy(), "w": g.w.copy()}
+    return Result(seconds, steps, rebuilds, share, state)
 
 
 # --- LAMMPS --------------------------------------------------------------------------------------
@@ -303,51 +307,19 @@ class Case:
     check: Callable[[list[Engine]], list[str]]
 
 
-def bed_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
+def _bed_engines(name: str, n: int, args, lmp: str | None, workdir: Path, log, v=None):
+    """The engines of a bed case (the settled bed, moving with velocities v if given) and its
+    physics check."""
     bed = beds.load(n, log=log)
     steps = args.bed_steps(n)
     r, m = beds.RADIUS, beds.MASS
-    engines = [
-        soft_engine(lambda t=t: beds.soft_bed(bed.x, bed.width, threads=t), t, 0, steps)
-        for t in args.threads
-    ]
-    if lmp:
-        data = workdir / f"bed-{n}.data"
-        box = (-2.0 * r, bed.width + 2.0 * r, -2.0 * r, 1.5 * bed.top)
-        beds.write_lammps_data(data, bed.x, np.full(n, r), np.full(n, m), box)
-        variables = {
-            "data": data,
-            **lammps_contact(m),
-            "dt": f"{beds.time_step():.17g}",
-            "skin": beds.SKIN,
-            "gravity": beds.GRAVITY,
-            "width": f"{bed.width:.17g}",
-            "warm": 0,
-            "steps": steps,
-        }
-        engines += [lammps_engine(lmp, "bed.in", workdir, variables, k, n, m) for k in args.ranks]
-    if args.rigid:
-        engines.append(rigid_engine(rigid_box_spec(bed), 0, args.rigid_steps(n)))
-
-    def check(engines: list[Engine]) -> list[str]:
-        return compare(engines, n, r, m, bed.x, box_overlaps(bed.width))
-
-    title = f"bed, {n} granules ({bed.width * 1e3:.0f} mm box, {steps} steps)"
-    return Case(title, engines, check)
-
-
-def sheared_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
-    bed = beds.load(n, log=log)
-    r, m = beds.RADIUS, beds.MASS
-    v = np.column_stack([SHEAR_SPEED * bed.x[:, 1] / bed.top, np.zeros(n)])
-    steps = args.bed_steps(n)
 
     def make(threads: int) -> SoftGranules:
         return beds.soft_bed(bed.x, bed.width, threads=threads, v=v)
 
     engines = [soft_engine(lambda t=t: make(t), t, 0, steps) for t in args.threads]
     if lmp:
-        data = workdir / f"sheared-{n}.data"
+        data = workdir / f"{name}-{n}.data"
         box = (-2.0 * r, bed.width + 2.0 * r, -2.0 * r, 1.5 * bed.top)
         beds.write_lammps_data(data, bed.x, np.full(n, r), np.full(n, m), box, v=v)
         variables = {
@@ -362,12 +334,24 @@ def sheared_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
         }
         engines += [lammps_engine(lmp, "bed.in", workdir, variables, k, n, m) for k in args.ranks]
     if args.rigid:
-        spec = rigid_box_spec(bed, v)
-        engines.append(rigid_engine(spec, 0, args.rigid_steps(n)))
+        engines.append(rigid_engine(rigid_box_spec(bed, v), 0, args.rigid_steps(n)))
 
     def check(engines: list[Engine]) -> list[str]:
         return compare(engines, n, r, m, bed.x, box_overlaps(bed.width))
 
+    return bed, steps, engines, check
+
+
+def bed_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
+    bed, steps, engines, check = _bed_engines("bed", n, args, lmp, workdir, log)
+    title = f"bed, {n} granules ({bed.width * 1e3:.0f} mm box, {steps} steps)"
+    return Case(title, engines, check)
+
+
+def sheared_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
+    bed = beds.load(n, log=log)
+    v = np.column_stack([SHEAR_SPEED * bed.x[:, 1] / bed.top, np.zeros(n)])
+    bed, steps, engines, check = _bed_engines("sheared", n, args, lmp, workdir, log, v)
     title = (
         f"sheared bed, {n} granules (the bed with v_x = {SHEAR_SPEED:g} m/s · y/top at "
         f"t = 0, {steps} steps)"
@@ -443,11 +427,7 @@ def soft_mill_engine(spec: SceneSpec, threads: int, warm: int, steps: int) -> En
         t0 = time.perf_counter()
         for _ in range(steps // substeps):
             sim.step()
-        seconds = time.perf_counter() - t0
-        rebuilds = g.n_rebuilds - before
-        share = rebuilds * neighbour_build_seconds(g, threads) / seconds
-        state = {"x": g.x.copy(), "v": g.v.copy(), "w": g.w.copy()}
-        return Result(seconds, steps, rebuilds, share, state)
+        return _soft_result(g, threads, steps, before, time.perf_counter() - t0)
 
     name = f"perga soft, {threads} thread{'s' if threads > 1 else ''}"
     return Engine(name, len(spec.granules), spec.dt, run)

@@ -4,10 +4,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from perga.soft import SoftGranules, contact_parameters, plane, uniform_table
+from perga.soft import SoftGranules, chamber, contact_parameters, plane, uniform_table
 
 RADIUS = 2e-3
 MASS = 1e-4
+R_CHAMBER = 0.05
 
 
 @dataclass
@@ -124,4 +125,31 @@ def impact(
         peak_overlap=float(d.max()),
         duration=float(t_end - t_start),
         granules=g,
+    )
+
+
+def chamber_gas(
+    n: int, seed: int, row: np.ndarray, *, speed: float = 1.0, overlapping: bool = False
+) -> SoftGranules:
+    """n granules (radii 0.8-1.2 RADIUS, mass ∝ r²) at random places in a round chamber of
+    radius R_CHAMBER, non-overlapping unless ``overlapping``, with random velocities (speed m/s
+    per component) and spins; every contact under ``row``."""
+    rng = np.random.default_rng(seed)
+    r = RADIUS * rng.uniform(0.8, 1.2, n)
+    pos: list[np.ndarray] = []
+    while len(pos) < n:
+        p = rng.uniform(-1, 1, 2) * (R_CHAMBER - 1.2 * RADIUS)
+        if np.hypot(*p) > R_CHAMBER - 1.2 * RADIUS:
+            continue
+        if not overlapping and any(np.hypot(*(p - q)) < 2.5 * RADIUS for q in pos):
+            continue
+        pos.append(p)
+    return SoftGranules(
+        np.array(pos),
+        r,
+        MASS * (r / RADIUS) ** 2,
+        uniform_table(row),
+        v=speed * rng.standard_normal((n, 2)),
+        w=rng.standard_normal(n) * speed / RADIUS,
+        walls=[chamber(R_CHAMBER)],
     )

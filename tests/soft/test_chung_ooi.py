@@ -12,7 +12,8 @@ written first, is their spin series, test 6 their tangential-velocity series.
    the closed forms of ``perga.analytic.contact`` within 2 % (the issue's; measured ≤ 0.3 % at
    the default step: the sampled peak lies within (π/50)²/8 ≈ 0.05 % of the true one, the
    duration is interpolated to the zero crossings). The default step is t_c/50 of the shortest
-   contact SoftGranules can have, a granule pair (m/2), so a wall impact runs at t_c/71.
+   contact that can form: for a single granule its wall contact (the figures quoted "at t_c/71"
+   were measured when a granule pair that cannot form still set the step).
 3. Normal impacts with damping, e = 0.2 … 1.0 at 3.9 m/s, alumina and cast iron: e within 0.5 %
    (measured ≤ 0.1 %), duration within 1 %, peak overlap within 0.5 %.
 4-5. Oblique impacts on a wall at constant speed and various angles, and at constant normal speed
@@ -123,8 +124,8 @@ K_LINEAR = 1e7  # N/m: linear law, t_c ≈ 16 µs on the 0.26 g alumina disc
 def test_3_normal_impact_with_damping_on_a_wall(material, model):
     """C&O test 3: a disc hits a rigid plane at 3.9 m/s, target e = 0.2 … 1.0 (force-end law).
 
-    At the default step (t_c/71 of the wall contact, see the module doc). e within 0.5 % of the
-    target (measured ≤ 0.1 %); the contact duration within 1 % (measured
+    At the default step (t_c/50 of the wall contact). e within 0.5 % of the target (measured
+    ≤ 0.1 % at t_c/71, see the module doc); the contact duration within 1 % (measured
     ≤ 0.31 %, the end of an undamped Hertz contact, where F ∝ δ^{3/2} has zero slope, being
     extrapolated linearly from the last two samples) and the peak overlap within 0.5 % (measured
     ≤ 0.05 %) of the closed forms on m_eff = m, R_eff = r.

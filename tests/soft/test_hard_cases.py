@@ -31,7 +31,7 @@ from perga.analytic.contact import (
 from perga.soft import SoftGranules, chamber, contact_parameters, plane, uniform_table
 from perga.soft import polygons as pg
 
-from .helpers import impact
+from .helpers import chamber_gas, impact
 
 E_VALUES = (0.05, 0.1, 0.3, 0.7, 1.0)
 F_VALUES = (0.0, 0.5, 1.0)
@@ -141,23 +141,8 @@ R_CHAMBER = 0.05  # m
 
 
 def _chamber_gas(n, seed, row, *, speed=3.0):
-    """n granules (radii 0.8-1.2 RADIUS, mass ∝ r²) at random non-overlapping places in the round
-    chamber, random velocities (speed m/s per component) and spins."""
-    rng = np.random.default_rng(seed)
-    r = RADIUS * rng.uniform(0.8, 1.2, n)
-    pos: list[np.ndarray] = []
-    while len(pos) < n:
-        p = rng.uniform(-1, 1, 2) * (R_CHAMBER - 1.2 * RADIUS)
-        if np.hypot(*p) > R_CHAMBER - 1.2 * RADIUS:
-            continue
-        if any(np.hypot(*(p - q)) < 2.5 * RADIUS for q in pos):
-            continue
-        pos.append(p)
-    return SoftGranules(
-        np.array(pos), r, MASS * (r / RADIUS) ** 2, uniform_table(row),
-        v=speed * rng.standard_normal((n, 2)), w=rng.standard_normal(n) * speed / RADIUS,
-        walls=[chamber(R_CHAMBER)],
-    )  # fmt: skip
+    """``helpers.chamber_gas`` at 3 m/s per component."""
+    return chamber_gas(n, seed, row, speed=speed)
 
 
 def _energies(g: SoftGranules, steps: int, every: int = 1) -> np.ndarray:

@@ -70,8 +70,9 @@ def test_dissipation_equals_kinetic_energy_lost(model, kind):
     The law's dissipation uses the rates extrapolated to the force time, the kinetic energy the
     mean velocity of each kick: they differ at O(dt²). Measured worst over e = 0.3-0.9 and
     1-30 m/s, as a fraction of ½ m_eff v0²: linear 8.4e-4 (wall), 1.7e-3 (pair), Hertz 5.3e-4,
-    9.5e-4 at the default step (t_c/50 of a granule pair: a wall's t_c/71), and 4× less at half
-    of it. Asserted: 2e-3 and 5e-4, and a fall of ≥ 3× (second order).
+    9.5e-4 at t_c/50 of a granule pair (a wall's t_c/71: the single granule's default step
+    then), and 4× less at half of it. Asserted at t_c/50 and t_c/100 of each contact: 2e-3 and
+    5e-4, and a fall of ≥ 3× (second order).
     """
     m_eff = MASS if kind == "wall" else 0.5 * MASS
     worst = {}

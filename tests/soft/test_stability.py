@@ -13,34 +13,13 @@ from perga.soft import (
     uniform_table,
 )
 
-R_CHAMBER = 0.05
-RADIUS = 2e-3
-MASS = 1e-4
+from .helpers import MASS, R_CHAMBER, RADIUS, chamber_gas
 
 
 def _chamber_gas(n, seed, *, overlapping=False, e=0.7, friction=0.5, rolling=0.0, speed=1.0):
-    """n granules in the round chamber: random non-overlapping (or overlapping) positions."""
-    rng = np.random.default_rng(seed)
-    r = RADIUS * rng.uniform(0.8, 1.2, n)
-    pos: list[np.ndarray] = []
-    while len(pos) < n:
-        p = rng.uniform(-1, 1, 2) * (R_CHAMBER - 1.2 * RADIUS)
-        if np.hypot(*p) > R_CHAMBER - 1.2 * RADIUS:
-            continue
-        if not overlapping and any(np.hypot(*(p - q)) < 2.5 * RADIUS for q in pos):
-            continue
-        pos.append(p)
-    v = speed * rng.standard_normal((n, 2))
+    """``helpers.chamber_gas`` with a linear contact (k_n = 1e6 N/m) of e, friction, rolling."""
     row = contact_parameters("linear", e, k_n=1e6, friction=friction, rolling=rolling)
-    return SoftGranules(
-        np.array(pos),
-        r,
-        MASS * (r / RADIUS) ** 2,
-        uniform_table(row),
-        v=v,
-        w=rng.standard_normal(n) * speed / RADIUS,
-        walls=[chamber(R_CHAMBER)],
-    )
+    return chamber_gas(n, seed, row, speed=speed, overlapping=overlapping)
 
 
 @pytest.mark.parametrize("rolling", [0.0, 0.1])

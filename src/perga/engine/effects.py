@@ -180,12 +180,36 @@ class Drive(Effect):
         scene.space.add(self.pivot, self.motor)
 
 
+class _AngularImpulseLosses(Effect):
+    """An effect whose constraints act on the relative rotation of two bodies, removing per step
+    |j|·|ω̄_rel|: the constraint's angular impulse times the mean of the relative angular
+    velocity before and after the step (exact for one impulse on a pair of bodies)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._before: dict[pymunk.Constraint, float] = {}
+
+    def _watch(self, constraint: pymunk.Constraint) -> None:
+        constraint.pre_solve = self._pre_solve
+        constraint.post_solve = self._post_solve
+
+    @staticmethod
+    def _relative(constraint: pymunk.Constraint) -> float:
+        return constraint.b.angular_velocity - constraint.a.angular_velocity
+
+    def _pre_solve(self, constraint: pymunk.Constraint, _space: pymunk.Space) -> None:
+        self._before[constraint] = self._relative(constraint)
+
+    def _post_solve(self, constraint: pymunk.Constraint, _space: pymunk.Space) -> None:
+        mean = 0.5 * (self._before[constraint] + self._relative(constraint))
+        self._removed += constraint.impulse * abs(mean)
+
+
 @_register
-class HingeFriction(Effect):
+class HingeFriction(_AngularImpulseLosses):
     """Coulomb friction torque at every hinge: per hinged hammer a ``SimpleMotor(hammer,
-    rotor, 0)`` with ``max_force`` = the torque (Chipmunk's joint-friction idiom). Removed
-    energy per step: |j|·|ω̄_rel|, the motor's angular impulse times the mean of the relative
-    angular velocity before and after the step (exact for one impulse on a pair of bodies)."""
+    rotor, 0)`` with ``max_force`` = the torque (Chipmunk's joint-friction idiom); its losses
+    as :class:`_AngularImpulseLosses`."""
 
     name = "hinge_friction"
     term = "friction"
@@ -193,56 +217,29 @@ class HingeFriction(Effect):
     def __init__(self, scene: Scene, torque: float) -> None:
         super().__init__()
         self.motors: list[pymunk.SimpleMotor] = []
-        self._before: dict[pymunk.Constraint, float] = {}
         for joint in scene.joints:
             motor = pymunk.SimpleMotor(joint.b, joint.a, 0.0)
             motor.max_force = u.to_internal(torque, TORQUE)
             motor.collide_bodies = False
-            motor.pre_solve = self._pre_solve
-            motor.post_solve = self._post_solve
+            self._watch(motor)
             scene.space.add(motor)
             self.motors.append(motor)
 
-    @staticmethod
-    def _relative(motor: pymunk.Constraint) -> float:
-        return motor.a.angular_velocity - motor.b.angular_velocity
 
-    def _pre_solve(self, motor: pymunk.Constraint, _space: pymunk.Space) -> None:
-        self._before[motor] = self._relative(motor)
-
-    def _post_solve(self, motor: pymunk.Constraint, _space: pymunk.Space) -> None:
-        mean = 0.5 * (self._before[motor] + self._relative(motor))
-        self._removed += motor.impulse * abs(mean)
-
-
-class SwingStops(Effect):
+class SwingStops(_AngularImpulseLosses):
     """The stops of hinged hammers (``RotaryLimitJoint``, built by the scene when a hammer has
     a ``swing_limit``): a hammer swinging into its stop is stopped by a perfectly inelastic
-    angular impulse. Removed energy per step, as for hinge friction: |j|·|ω̄_rel|, the stop's
-    angular impulse times the mean relative angular velocity before and after the step; it
-    is counted with the contacts' dissipation. Not in the registry: built for the hammers
-    that have stops, not from ``EffectsSpec``."""
+    angular impulse, whose losses (:class:`_AngularImpulseLosses`) count with the contacts'
+    dissipation. Not in the registry: built for the hammers that have stops, not from
+    ``EffectsSpec``."""
 
     name = "swing_stops"
     term = "contact"
 
     def __init__(self, stops: list[pymunk.RotaryLimitJoint]) -> None:
         super().__init__()
-        self._before: dict[pymunk.Constraint, float] = {}
         for stop in stops:
-            stop.pre_solve = self._pre_solve
-            stop.post_solve = self._post_solve
-
-    @staticmethod
-    def _relative(stop: pymunk.Constraint) -> float:
-        return stop.b.angular_velocity - stop.a.angular_velocity
-
-    def _pre_solve(self, stop: pymunk.Constraint, _space: pymunk.Space) -> None:
-        self._before[stop] = self._relative(stop)
-
-    def _post_solve(self, stop: pymunk.Constraint, _space: pymunk.Space) -> None:
-        mean = 0.5 * (self._before[stop] + self._relative(stop))
-        self._removed += stop.impulse * abs(mean)
+            self._watch(stop)
 
 
 @_register

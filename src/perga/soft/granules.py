@@ -123,6 +123,7 @@ class SoftGranules:
         self._no_polygons = pg.no_polygons()
         self.polygon_hist = np.zeros((n, self._poly[0].n_poly, pg.HIST_COLUMNS))
         self.dissipated = np.zeros(3)
+        self.pairs = bool(pairs)
         self.gravity = _f64(gravity, (2,))
         self.v_max = float(v_max)
         self.t_c = self.shortest_contact_duration()
@@ -136,7 +137,6 @@ class SoftGranules:
         self.start, self.nbr, self.hist = empty_list(n)
         self.x_ref = self.x.copy()
         self._rebuild = True
-        self.pairs = bool(pairs)
         self.time = 0.0
         self.n_rebuilds = 0
 
@@ -155,19 +155,20 @@ class SoftGranules:
     def shortest_contact_duration(self) -> float:
         """Shortest head-on contact duration over the material pairs present, s.
 
-        Granule pairs use the two smallest masses of their materials (m_eff grows with both
-        masses), walls the smallest granule mass, polygons ``_polygon_durations``; Hertz at
-        approach speed v_max.
+        Granule pairs (that can form: with ``pairs``, two granules at least) use the two
+        smallest masses of their materials (m_eff grows with both masses), walls the smallest
+        granule mass, polygons ``_polygon_durations``; Hertz at approach speed v_max.
         """
         if self.n == 0:
             return math.inf
         durations = []
         mats = np.unique(self.mat)
         m_min = {int(a): float(self.m[self.mat == a].min()) for a in mats}
+        count = {int(a): int(np.sum(self.mat == a)) for a in mats}
         for a in mats:
             for b in mats:
-                if b < a:
-                    continue
+                if b < a or not self.pairs or (a == b and count[int(a)] < 2):
+                    continue  # a pair that cannot form
                 ma, mb = m_min[int(a)], m_min[int(b)]
                 row = self.params[a, b]
                 durations.append(contact_duration(row, ma * mb / (ma + mb), self.v_max))
