@@ -188,7 +188,10 @@ def _finish(
     directory: Path,
 ) -> None:
     for recorder in recorders:
-        recorder.table.close()
+        try:
+            recorder.close()
+        except Exception as exc:  # summary.json must still be written
+            summary.warnings.append(f"{type(recorder).__name__}.close failed: {exc}")
     summary.wall_time = wall
     if sim is not None:
         summary.steps, summary.simulated_time = sim.steps, sim.time

@@ -18,12 +18,24 @@ from perga.output.tables import Table
 
 
 class Recorder(Protocol):
-    """What the runner needs of a recorder: its table (to close) and ``record(sim)``."""
-
-    table: Table
+    """What the runner needs of a recorder: ``record(sim)`` at each frame and ``close()`` at
+    the end of the run, whatever ended it."""
 
     def record(self, sim: Simulation) -> None:
         """Append what this recorder keeps at the simulation's current time."""
+
+    def close(self) -> None:
+        """Finish the recorder's files (idempotent)."""
+
+
+class TableRecorder:
+    """A recorder that writes one CSV table (``self.table``)."""
+
+    table: Table
+
+    def close(self) -> None:
+        """Close the table (idempotent)."""
+        self.table.close()
 
 
 class PhaseLock:
@@ -44,7 +56,7 @@ class PhaseLock:
         return True
 
 
-class GranuleRecorder:
+class GranuleRecorder(TableRecorder):
     """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed (SI)."""
 
     columns = ("time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed")
@@ -66,7 +78,7 @@ class GranuleRecorder:
         )
 
 
-class HammerRecorder:
+class HammerRecorder(TableRecorder):
     """hammers.csv: time, id, swing_angle, angular_velocity, vx, vy of each hammer's centre of
     mass, and the rotor's angle and angular velocity (id = -1)."""
 
@@ -96,7 +108,7 @@ def _impact_row(impact: Impact) -> tuple[object, ...]:
     return tuple(c for v in values for c in (v if isinstance(v, tuple) else (v,)))
 
 
-class ImpactRecorder:
+class ImpactRecorder(TableRecorder):
     """impacts.csv: every granule-hammer impact as it happens, one column per field of
     :class:`~perga.engine.simulation.Impact` (SI)."""
 
@@ -113,7 +125,7 @@ class ImpactRecorder:
         self.written += len(new)
 
 
-class EnergyRecorder:
+class EnergyRecorder(TableRecorder):
     """energy.csv: the cumulative energy ledger at each frame (J)."""
 
     columns = (
