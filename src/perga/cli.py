@@ -115,6 +115,19 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render(args: argparse.Namespace) -> int:
+    from perga.output.render import render
+
+    out = args.output or args.run / ("trajectories.png" if args.trajectories else "preview.png")
+    try:
+        t = render(args.run, out, time=args.time, trajectories=args.trajectories)
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {out} (t = {t:.6g} s)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
@@ -145,6 +158,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(handler=_run)
+    render = sub.add_parser("render", help="a preview PNG of a run (matplotlib, no OpenGL)")
+    render.add_argument("run", type=Path, metavar="RUN", help="a run directory")
+    render.add_argument("--time", type=float, help="the frame nearest this time, s (default last)")
+    render.add_argument("--trajectories", action="store_true", help="granule paths, by time")
+    render.add_argument("-o", "--output", type=Path, help="PNG (default RUN/preview.png)")
+    render.set_defaults(handler=_render)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)
