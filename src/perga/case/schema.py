@@ -386,8 +386,10 @@ class Output(Strict):
 
     directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
     every: float = Field(1e-3, gt=0, description="recording interval in simulated time, s, > 0")
-    record: tuple[Literal["granules", "hammers", "impacts", "energy"], ...] = Field(
-        ("granules", "hammers", "impacts", "energy"), description="tables to write"
+    record: tuple[Literal["granules", "hammers", "impacts", "energy", "vtk"], ...] = Field(
+        ("granules", "hammers", "impacts", "energy", "vtk"),
+        description="what to write: CSV tables (granules, hammers, impacts, energy) and 'vtk' "
+        "(ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
     )
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from perga.engine.simulation import Impact, Simulation
 from perga.output.tables import Table
+from perga.output.vtk import VtkRecorder
 
 
 class Recorder(Protocol):
@@ -159,10 +160,11 @@ class EnergyRecorder(TableRecorder):
         )
 
 
-RECORDERS = {
+RECORDERS: dict[str, type[Recorder]] = {
     "granules": GranuleRecorder,
     "hammers": HammerRecorder,
     "impacts": ImpactRecorder,
     "energy": EnergyRecorder,
+    "vtk": VtkRecorder,
 }
 """Recorder class by the name used in the case file's output.record."""

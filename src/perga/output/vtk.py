@@ -1,0 +1,280 @@
+"""ParaView output: binary, zlib-compressed ``.vtu`` files written by VTK (through pyvista) and
+``.pvd`` collections whose ``timestep`` is simulated time, s (design notes, section 6).
+
+Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
+
+* ``granules.pvd`` + ``granules_NNNNNN.vtu``, one per frame: a point per granule with a
+  VTK_VERTEX cell; point data ``radius`` (m), ``velocity`` (m/s, 3 components), ``speed``
+  (m/s), ``angular_velocity`` (rad/s), ``kinetic_energy`` (½mv² + ½Iω², J), ``id`` (index in
+  the spec), ``material`` (index into the sorted granule material names, listed in a comment of
+  ``granules.pvd``), ``impacts`` (granule-hammer impacts so far); with soft contacts also
+  ``contacts`` (granule, wall and hammer contacts now: overlap > 0, hammers by the kernel's
+  active flag) and ``overlap_max`` (largest of those overlaps, m; 0 without contact).
+* ``machine.pvd`` + ``machine_NNNNNN.vtu``, one per frame: each hammer as a VTK_POLYGON posed at
+  the frame, then the rotor as a 64-gon of the rotor radius; cell data ``id`` (hammer index,
+  −1 for the rotor), ``swing_angle`` (α, rad; 0 for the rotor), ``angle`` (absolute orientation:
+  rotor angle + angle on the rotor + α, rad), ``angular_velocity`` (rad/s), ``hinge_force``
+  (magnitude of the hinge reaction over the last Pymunk step, N; 0 for welded and free hammers
+  and the rotor).
+* ``chamber.vtu``: the chamber's inner circle as one closed VTK_POLY_LINE (256 segments),
+  written at the first frame (absent without a chamber).
+* ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule through its recorded frame
+  positions; point data ``time`` (s) and ``speed`` (m/s), cell data ``id``.
+* ``impacts.vtu`` (at ``close``): a VTK_VERTEX per granule-hammer impact at its contact point;
+  point data ``time`` (s), ``granule``, ``hammer``, ``normal_impulse`` (N·s),
+  ``granule_energy_gain`` (J), ``dissipated`` (J), ``normal`` (3 components). With no impacts
+  the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty arrays).
+
+Each ``.pvd`` is rewritten atomically (temporary file, then ``os.replace``) after every frame,
+so a run stopped at any point leaves valid collections of the frames written so far.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pymunk
+import pyvista as pv
+from numpy.typing import NDArray
+
+from perga.engine import units as u
+from perga.engine.simulation import FloatArray, Simulation
+from perga.engine.soft_simulation import SoftSimulation
+from perga.soft import polygons as pg
+
+ROTOR_SIDES = 64
+"""Sides of the polygon drawn for the rotor disc."""
+CHAMBER_SEGMENTS = 256
+"""Segments of the polyline drawn for the chamber's inner circle."""
+
+
+class PvdSeries:
+    """A ``NAME.pvd`` collection of ``NAME_NNNNNN.vtu`` frames in ``directory``; ``comment`` is
+    written as an XML comment in the index."""
+
+    def __init__(self, directory: Path, name: str, comment: str = "") -> None:
+        self.directory = directory
+        self.name = name
+        self.comment = comment
+        self.entries: list[tuple[float, str]] = []
+
+    @property
+    def path(self) -> Path:
+        """The ``.pvd`` file."""
+        return self.directory / f"{self.name}.pvd"
+
+    def add(self, time: float, mesh: pv.DataSet) -> None:
+        """Write ``mesh`` as the frame at ``time`` (s), then rewrite the index atomically."""
+        file = f"{self.name}_{len(self.entries):06d}.vtu"
+        mesh.save(self.directory / file, binary=True, compression="zlib")
+        self.entries.append((time, file))
+        root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+        if self.comment:
+            root.append(ET.Comment(f" {self.comment} "))
+        collection = ET.SubElement(root, "Collection")
+        for t, f in self.entries:
+            ET.SubElement(collection, "DataSet", timestep=repr(t), group="", part="0", file=f)
+        ET.indent(root)
+        temporary = self.path.with_suffix(".pvd.tmp")
+        ET.ElementTree(root).write(temporary, encoding="utf-8", xml_declaration=True)
+        os.replace(temporary, self.path)
+
+
+def _grid(
+    cells: list[NDArray[np.int64]], cell_type: int, points: FloatArray
+) -> pv.UnstructuredGrid:
+    """Cells of one type, each a list of point indices, over 2-D ``points`` (m) lifted to z = 0."""
+    flat = np.concatenate([np.concatenate(([len(c)], c)) for c in cells]) if cells else []
+    return pv.UnstructuredGrid(
+        np.asarray(flat, dtype=np.int64),
+        np.full(len(cells), cell_type, dtype=np.uint8),
+        _lift(points),
+    )
+
+
+def _lift(points: FloatArray) -> FloatArray:
+    """(n, 2) -> (n, 3) with z = 0."""
+    out = np.zeros((len(points), 3))
+    out[:, :2] = points
+    return out
+
+
+def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
+    """``n`` points (m), each with its own VTK_VERTEX cell."""
+    cells = np.column_stack((np.ones(n, dtype=np.int64), np.arange(n, dtype=np.int64)))
+    return pv.UnstructuredGrid(
+        cells.ravel(), np.full(n, pv.CellType.VERTEX, dtype=np.uint8), _lift(points)
+    )
+
+
+def _circle(radius: float, sides: int, angle: float = 0.0) -> FloatArray:
+    """Vertices of a regular ``sides``-gon of circumradius ``radius`` (m) about the origin,
+    counter-clockwise from ``angle`` (rad)."""
+    phi = angle + 2.0 * math.pi * np.arange(sides) / sides
+    return radius * np.column_stack((np.cos(phi), np.sin(phi)))
+
+
+def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
+    """Per granule: the number of contacts now (granule pairs and walls with overlap > 0,
+    hammers whose contact the kernel holds active) and the largest of their overlaps, m."""
+    g = sim.granules
+    n = g.n
+    i, j, delta, _ = g._pairs()
+    count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+    overlap = np.zeros(n)
+    np.maximum.at(overlap, i, delta)
+    np.maximum.at(overlap, j, delta)
+    walls = g._walls_overlap()
+    count += np.count_nonzero(walls > 0.0, axis=1)
+    if walls.size:
+        np.maximum(overlap, walls.max(axis=1), out=overlap)
+    active = g.polygon_hist[:, :, pg.HIST_ACTIVE] != 0.0
+    count += np.count_nonzero(active, axis=1)
+    polys = g._poly[0]
+    for a, k in np.argwhere(active):
+        d, _, _ = pg.closest_feature(
+            g.x[a, 0], g.x[a, 1], polys.vertices, polys.start[k], polys.start[k + 1]
+        )
+        overlap[a] = max(overlap[a], g.r[a] - d)
+    return count.astype(np.int32), overlap
+
+
+class VtkRecorder:
+    """Writes the files listed in the module doc into ``directory / "vtk"``: ``record(sim)``
+    a frame at ``sim.time``, ``close()`` the trajectories and impacts (idempotent)."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = directory / "vtk"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.granules = PvdSeries(self.directory, "granules")
+        self.machine = PvdSeries(self.directory, "machine")
+        self.times: list[float] = []
+        self.positions: list[FloatArray] = []
+        self.speeds: list[FloatArray] = []
+        self._sim: Simulation | None = None
+        self._radius = self._mass = self._moment = np.empty(0)
+        self._material = np.empty(0, dtype=np.int32)
+        self._impact_count = np.empty(0, dtype=np.int64)
+        self._impacts_counted = 0
+        self._closed = False
+
+    def _start(self, sim: Simulation) -> None:
+        """Constant per-granule arrays, material names and the chamber, at the first frame."""
+        spec = sim.scene.spec
+        names = sorted({g.material for g in spec.granules})
+        self._radius = np.array([g.radius for g in spec.granules], dtype=float)
+        self._mass = np.array([g.mass for g in spec.granules], dtype=float)
+        self._moment = np.array([g.moment if g.rolls else 0.0 for g in spec.granules])
+        self._material = np.array([names.index(g.material) for g in spec.granules], dtype=np.int32)
+        self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)
+        self.granules.comment = "material: " + ", ".join(
+            f"{k} = {name}" for k, name in enumerate(names)
+        )
+        if spec.chamber is not None:
+            ring = np.append(np.arange(CHAMBER_SEGMENTS), 0)
+            chamber = _grid(
+                [ring], pv.CellType.POLY_LINE, _circle(spec.chamber.radius, CHAMBER_SEGMENTS)
+            )
+            chamber.save(self.directory / "chamber.vtu", binary=True, compression="zlib")
+
+    def record(self, sim: Simulation) -> None:
+        """Write the granule and machine frames at ``sim.time`` and update both ``.pvd``."""
+        if self._sim is None:
+            self._start(sim)
+        self._sim = sim
+        t = sim.time
+        p, v, w = (
+            sim.granule_positions(),
+            sim.granule_velocities(),
+            sim.granule_angular_velocities(),
+        )
+        speed = np.hypot(v[:, 0], v[:, 1])
+        new = sim.impacts[self._impacts_counted :]
+        for impact in new:
+            self._impact_count[impact.granule] += 1
+        self._impacts_counted += len(new)
+
+        mesh = _vertices(len(p), p)
+        data = mesh.point_data
+        data["radius"] = self._radius
+        data["velocity"] = _lift(v)
+        data["speed"] = speed
+        data["angular_velocity"] = w
+        data["kinetic_energy"] = 0.5 * self._mass * speed**2 + 0.5 * self._moment * w**2
+        data["id"] = np.arange(len(p), dtype=np.int64)
+        data["material"] = self._material
+        data["impacts"] = self._impact_count
+        if isinstance(sim, SoftSimulation):
+            data["contacts"], data["overlap_max"] = soft_contacts(sim)
+        self.granules.add(t, mesh)
+        self.machine.add(t, machine_mesh(sim))
+        self.times.append(t)
+        self.positions.append(p)
+        self.speeds.append(speed)
+
+    def close(self) -> None:
+        """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded)."""
+        if self._closed or self._sim is None:
+            return
+        self._closed = True
+        frames, n = len(self.times), len(self.positions[0])
+        track = np.stack(self.positions, axis=1).reshape(-1, 2)  # granule-major
+        cells = [np.arange(k * frames, (k + 1) * frames, dtype=np.int64) for k in range(n)]
+        trajectories = _grid(cells, pv.CellType.POLY_LINE, track)
+        trajectories.point_data["time"] = np.tile(np.array(self.times), n)
+        trajectories.point_data["speed"] = np.stack(self.speeds, axis=1).ravel()
+        trajectories.cell_data["id"] = np.arange(n, dtype=np.int64)
+        trajectories.save(self.directory / "trajectories.vtu", binary=True, compression="zlib")
+
+        impacts = self._sim.impacts
+        points = np.array([i.point for i in impacts], dtype=float).reshape(-1, 2)
+        mesh = _vertices(len(impacts), points)
+        columns: dict[str, np.ndarray] = {
+            name: np.array([getattr(i, name) for i in impacts], dtype=float)
+            for name in ("time", "normal_impulse", "granule_energy_gain", "dissipated")
+        }
+        for name in ("granule", "hammer"):
+            columns[name] = np.array([getattr(i, name) for i in impacts], dtype=np.int64)
+        columns["normal"] = _lift(np.array([i.normal for i in impacts], dtype=float).reshape(-1, 2))
+        for name, values in columns.items():
+            # through VTK: pyvista refuses empty arrays, a run without impacts has them
+            mesh.GetPointData().AddArray(pv.convert_array(values, name=name))
+        mesh.save(self.directory / "impacts.vtu", binary=True, compression="zlib")
+
+
+def machine_mesh(sim: Simulation) -> pv.UnstructuredGrid:
+    """The hammers posed now, then the rotor disc, as polygons with the cell data listed in the
+    module doc."""
+    scene = sim.scene
+    hinges = {j.b: j for j in scene.joints if isinstance(j, pymunk.PivotJoint)}
+    outlines: list[FloatArray] = []
+    force: list[float] = []
+    for body, shape in zip(scene.hammer_bodies, scene.hammer_shapes, strict=True):
+        outlines.append(
+            np.array([tuple(body.local_to_world(v)) for v in shape.get_vertices()]) * u.LENGTH
+        )
+        joint = hinges.get(body)
+        force.append(0.0 if joint is None else joint.impulse * u.IMPULSE / sim.dt)
+    rotor = scene.rotor
+    disc = _circle(u.to_internal(scene.spec.rotor.radius, u.LENGTH), ROTOR_SIDES)
+    outlines.append(np.array([tuple(rotor.local_to_world(tuple(v))) for v in disc]) * u.LENGTH)
+    ends = np.cumsum([0] + [len(o) for o in outlines])
+    cells = [np.arange(a, b, dtype=np.int64) for a, b in itertools.pairwise(ends)]
+    mesh = _grid(cells, pv.CellType.POLYGON, np.concatenate(outlines))
+    alpha = sim.hammer_swing_angles()
+    mounts = np.array([h.angle_on_rotor for h in scene.spec.hammers], dtype=float)
+    theta = sim.rotor_angle()
+    data = mesh.cell_data
+    data["id"] = np.append(np.arange(len(alpha), dtype=np.int64), -1)
+    data["swing_angle"] = np.append(alpha, 0.0)
+    data["angle"] = np.append(theta + mounts + alpha, theta)
+    data["angular_velocity"] = np.append(
+        sim.hammer_angular_velocities(), sim.rotor_angular_velocity()
+    )
+    data["hinge_force"] = np.append(force, 0.0)
+    return mesh

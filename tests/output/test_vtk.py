@@ -1,0 +1,337 @@
+"""perga.output.vtk: every file read back by meshio and pyvista equals what the simulation held
+when it was recorded. Values are compared exactly (float64 written, float64 read) except the
+soft overlaps, recomputed here by an independent formula (1e-12 m: round-off of two ways of
+computing a point-segment distance on ~0.1 m coordinates)."""
+
+from __future__ import annotations
+
+import dataclasses
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+import pyvista as pv
+
+from perga.case import load_case
+from perga.engine import ContactSpec, Simulation, build_scene
+from perga.engine import units as u
+from perga.engine.from_case import scene_spec
+from perga.engine.soft_simulation import SoftSimulation
+from perga.engine.spec import SceneSpec
+from perga.output.vtk import CHAMBER_SEGMENTS, ROTOR_SIDES, VtkRecorder
+from perga.soft import polygons as pg
+
+CASES = Path(__file__).parents[2] / "cases"
+FRAMES = 12
+STEPS_PER_FRAME = {"rigid": 1, "soft": 5}
+
+
+@dataclass
+class Frame:
+    """What the simulation held when a frame was recorded (SI)."""
+
+    time: float
+    positions: np.ndarray
+    velocities: np.ndarray
+    angular_velocities: np.ndarray
+    hammer_vertices: list[np.ndarray]
+    swing_angles: np.ndarray
+    hammer_spin: np.ndarray
+    hinge_force: np.ndarray
+    rotor_angle: float
+    rotor_spin: float
+    impacts: np.ndarray
+    soft: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass
+class Run:
+    sim: Simulation
+    directory: Path
+    frames: list[Frame]
+    pvd_after_record: list[list[tuple[float, str]]]
+
+
+def spec_near_hammer(soft: bool) -> SceneSpec:
+    """The single-granule case with the granule 0.5 mm ahead of the hammer's leading face (so it
+    is struck within the first frames) and, for soft contacts, a second granule overlapping it by
+    0.1 mm (granule pairs on)."""
+    name = "soft-single-granule" if soft else "single-granule"
+    spec = scene_spec(load_case(CASES / f"{name}.toml"))
+    g = spec.granules[0]
+    granules = [dataclasses.replace(g, position=(0.11, 0.0125 + 0.0005))]
+    if not soft:
+        return dataclasses.replace(spec, granules=tuple(granules))
+    granules.append(dataclasses.replace(g, position=(0.11 + 2 * g.radius - 1e-4, 0.013)))
+    pair = ContactSpec(g.material, g.material, 0.7, 0.35)
+    return dataclasses.replace(
+        spec, granules=tuple(granules), contacts=(*spec.contacts, pair), granule_collisions=True
+    )
+
+
+def hinge_forces(sim: Simulation) -> np.ndarray:
+    joint_of = {j.b: j for j in sim.scene.joints}
+    return np.array(
+        [
+            joint_of[b].impulse * u.IMPULSE / sim.dt if b in joint_of else 0.0
+            for b in sim.scene.hammer_bodies
+        ]
+    )
+
+
+def point_polygon_distance(p: np.ndarray, vertices: np.ndarray) -> float:
+    """Distance (m) from p to the boundary of a polygon that does not contain p."""
+    a, b = vertices, np.roll(vertices, -1, axis=0)
+    e = b - a
+    t = np.clip(np.sum((p - a) * e, axis=1) / np.sum(e * e, axis=1), 0.0, 1.0)
+    return float(np.min(np.linalg.norm(p - (a + t[:, None] * e), axis=1)))
+
+
+def soft_expected(sim: SoftSimulation) -> dict[str, np.ndarray]:
+    """Contacts and largest overlap per granule by brute force over pairs, walls and hammers."""
+    g = sim.granules
+    contacts, overlap = np.zeros(g.n, dtype=int), np.zeros(g.n)
+    for i in range(g.n):
+        for j in range(g.n):
+            delta = g.r[i] + g.r[j] - np.linalg.norm(g.x[i] - g.x[j])
+            if i != j and delta > 0:
+                contacts[i] += 1
+                overlap[i] = max(overlap[i], delta)
+        wall = g.r[i] + np.linalg.norm(g.x[i]) - sim.scene.spec.chamber.radius
+        if wall > 0:
+            contacts[i] += 1
+            overlap[i] = max(overlap[i], wall)
+        polys = g.polygons
+        for k in range(polys.n_poly):
+            if g.polygon_hist[i, k, pg.HIST_ACTIVE]:
+                verts = polys.vertices[polys.start[k] : polys.start[k + 1]]
+                contacts[i] += 1
+                overlap[i] = max(overlap[i], g.r[i] - point_polygon_distance(g.x[i], verts))
+    return {"contacts": contacts, "overlap_max": overlap}
+
+
+def read_pvd(path: Path) -> list[tuple[float, str]]:
+    """(timestep, file) of every DataSet of a .pvd, checking that each file exists."""
+    root = ET.parse(path).getroot()
+    assert root.get("type") == "Collection"
+    entries = [(float(d.get("timestep")), d.get("file")) for d in root.iter("DataSet")]
+    assert all((path.parent / f).is_file() for _, f in entries)
+    return entries
+
+
+def snapshot(sim: Simulation) -> Frame:
+    scene = sim.scene
+    counts = np.bincount([i.granule for i in sim.impacts], minlength=len(scene.spec.granules))
+    return Frame(
+        time=sim.time,
+        positions=sim.granule_positions(),
+        velocities=sim.granule_velocities(),
+        angular_velocities=sim.granule_angular_velocities(),
+        hammer_vertices=[
+            np.array([tuple(s.body.local_to_world(v)) for v in s.get_vertices()]) * u.LENGTH
+            for s in scene.hammer_shapes
+        ],
+        swing_angles=sim.hammer_swing_angles(),
+        hammer_spin=sim.hammer_angular_velocities(),
+        hinge_force=hinge_forces(sim),
+        rotor_angle=sim.rotor_angle(),
+        rotor_spin=sim.rotor_angular_velocity(),
+        impacts=counts,
+        soft=soft_expected(sim) if isinstance(sim, SoftSimulation) else {},
+    )
+
+
+def simulate(directory: Path, kind: str) -> Run:
+    spec = spec_near_hammer(kind == "soft")
+    sim = SoftSimulation.from_spec(spec) if kind == "soft" else Simulation(build_scene(spec))
+    recorder = VtkRecorder(directory)
+    frames, pvds = [], []
+    for k in range(FRAMES):
+        if k:
+            for _ in range(STEPS_PER_FRAME[kind]):
+                sim.step()
+        frames.append(snapshot(sim))
+        recorder.record(sim)
+        pvds.append(read_pvd(directory / "vtk" / "granules.pvd"))
+        assert read_pvd(directory / "vtk" / "machine.pvd") == [
+            (t, f.replace("granules", "machine")) for t, f in pvds[-1]
+        ]
+    recorder.close()
+    return Run(sim, directory / "vtk", frames, pvds)
+
+
+@pytest.fixture(scope="module", params=["rigid", "soft"])
+def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Run:
+    return simulate(tmp_path_factory.mktemp(request.param), request.param)
+
+
+def both(path: Path) -> tuple[meshio.Mesh, pv.UnstructuredGrid]:
+    return meshio.read(path), pv.read(path)
+
+
+def test_pvd_is_valid_after_every_record(run: Run) -> None:
+    for k, entries in enumerate(run.pvd_after_record):
+        assert (
+            entries
+            == [(f.time, f"granules_{j:06d}.vtu") for j, f in enumerate(run.frames)][: k + 1]
+        )
+
+
+def test_pvd_lists_times_in_order(run: Run) -> None:
+    entries = read_pvd(run.directory / "granules.pvd")
+    assert [t for t, _ in entries] == [f.time for f in run.frames]
+    assert [t for t, _ in entries] == sorted(t for t, _ in entries)
+    assert len(entries) == FRAMES
+
+
+def test_granule_frames_round_trip(run: Run) -> None:
+    spec = run.sim.scene.spec
+    radius = np.array([g.radius for g in spec.granules])
+    mass = np.array([g.mass for g in spec.granules])
+    moment = np.array([g.moment for g in spec.granules])
+    for (_, file), frame in zip(read_pvd(run.directory / "granules.pvd"), run.frames, strict=True):
+        m, p = both(run.directory / file)
+        speed = np.hypot(frame.velocities[:, 0], frame.velocities[:, 1])
+        w = frame.angular_velocities
+        expected = {
+            "radius": radius,
+            "velocity": np.column_stack((frame.velocities, np.zeros(len(w)))),
+            "speed": speed,
+            "angular_velocity": w,
+            "kinetic_energy": 0.5 * mass * speed**2 + 0.5 * moment * w**2,
+            "id": np.arange(len(w)),
+            "material": np.zeros(len(w)),
+            "impacts": frame.impacts,
+            **frame.soft,
+        }
+        points = np.column_stack((frame.positions, np.zeros(len(w))))
+        np.testing.assert_array_equal(m.points, points)
+        np.testing.assert_array_equal(p.points, points)
+        assert [c.type for c in m.cells] == ["vertex"]
+        np.testing.assert_array_equal(m.cells[0].data.ravel(), np.arange(len(w)))
+        assert set(p.celltypes) == {pv.CellType.VERTEX}
+        assert set(m.point_data) == set(p.point_data) == set(expected)
+        for name, value in expected.items():
+            if name == "overlap_max":
+                np.testing.assert_allclose(m.point_data[name], value, rtol=0, atol=1e-12)
+                np.testing.assert_array_equal(p.point_data[name], m.point_data[name])
+            else:
+                np.testing.assert_array_equal(m.point_data[name], value, err_msg=name)
+                np.testing.assert_array_equal(p.point_data[name], value, err_msg=name)
+    assert "material: 0 = beebread" in (run.directory / "granules.pvd").read_text()
+
+
+def test_scene_is_exercised(run: Run) -> None:
+    """The checks above see an impact and, for soft contacts, pair and hammer contacts."""
+    assert run.frames[-1].impacts.sum() >= 1
+    if run.frames[0].soft:
+        assert run.frames[0].soft["contacts"].tolist() == [1, 1]  # the overlapping pair
+        r = run.sim.granules.r
+        apart = [np.linalg.norm(f.positions[0] - f.positions[1]) > r[0] + r[1] for f in run.frames]
+        hammer = [
+            a and f.soft["overlap_max"].min() > 0 for a, f in zip(apart, run.frames, strict=True)
+        ]
+        assert any(hammer)  # both granules on the hammer, not on each other
+
+
+def test_machine_frames_round_trip(run: Run) -> None:
+    spec = run.sim.scene.spec
+    for (_, file), frame in zip(read_pvd(run.directory / "machine.pvd"), run.frames, strict=True):
+        m, p = both(run.directory / file)
+        theta = frame.rotor_angle
+        phi = theta + 2 * np.pi * np.arange(ROTOR_SIDES) / ROTOR_SIDES
+        rotor = spec.rotor.radius * np.column_stack((np.cos(phi), np.sin(phi)))
+        outlines = [*frame.hammer_vertices, rotor]
+        for k, outline in enumerate(outlines):
+            cell = p.get_cell(k)
+            assert cell.type == pv.CellType.POLYGON
+            np.testing.assert_allclose(
+                p.points[cell.point_ids, :2],
+                outline,
+                rtol=0,
+                atol=1e-15 if k == len(outlines) - 1 else 0,
+            )
+        flat = np.concatenate([c.data.ravel() for c in m.cells])
+        np.testing.assert_array_equal(
+            m.points[flat],
+            p.points[np.concatenate([p.get_cell(k).point_ids for k in range(len(outlines))])],
+        )
+        n = len(frame.swing_angles)
+        mounts = np.array([h.angle_on_rotor for h in spec.hammers])
+        expected = {
+            "id": [*range(n), -1],
+            "swing_angle": [*frame.swing_angles, 0.0],
+            "angle": [*(theta + mounts + frame.swing_angles), theta],
+            "angular_velocity": [*frame.hammer_spin, frame.rotor_spin],
+            "hinge_force": [*frame.hinge_force, 0.0],
+        }
+        for name, value in expected.items():
+            np.testing.assert_array_equal(p.cell_data[name], value, err_msg=name)
+            np.testing.assert_array_equal(np.concatenate(m.cell_data[name]), value, err_msg=name)
+    assert any(f.hinge_force[0] > 0 for f in run.frames[1:])
+
+
+def test_chamber_written_once(run: Run) -> None:
+    m, p = both(run.directory / "chamber.vtu")
+    np.testing.assert_allclose(
+        np.hypot(p.points[:, 0], p.points[:, 1]), run.sim.scene.spec.chamber.radius, rtol=1e-15
+    )
+    assert p.n_points == CHAMBER_SEGMENTS and p.n_cells == 1
+    ids = p.get_cell(0).point_ids
+    assert ids[0] == ids[-1] and len(ids) == CHAMBER_SEGMENTS + 1
+    np.testing.assert_array_equal(m.points, p.points)
+
+
+def test_trajectories_round_trip(run: Run) -> None:
+    m, p = both(run.directory / "trajectories.vtu")
+    n = len(run.frames[0].positions)
+    assert p.n_cells == n
+    for g in range(n):
+        cell = p.get_cell(g)
+        assert cell.type == pv.CellType.POLY_LINE
+        track = np.array([f.positions[g] for f in run.frames])
+        np.testing.assert_array_equal(p.points[cell.point_ids, :2], track)
+        np.testing.assert_array_equal(m.points[cell.point_ids, :2], track)
+        speed = [np.hypot(*f.velocities[g]) for f in run.frames]
+        for mesh in (m, p):
+            np.testing.assert_array_equal(
+                mesh.point_data["time"][cell.point_ids], [f.time for f in run.frames]
+            )
+            np.testing.assert_array_equal(mesh.point_data["speed"][cell.point_ids], speed)
+    np.testing.assert_array_equal(p.cell_data["id"], np.arange(n))
+
+
+def test_impacts_round_trip(run: Run) -> None:
+    impacts = run.sim.impacts
+    m, p = both(run.directory / "impacts.vtu")
+    for mesh in (m, p):
+        np.testing.assert_array_equal(mesh.points[:, :2], [i.point for i in impacts])
+        for name in (
+            "time",
+            "normal_impulse",
+            "granule_energy_gain",
+            "dissipated",
+            "granule",
+            "hammer",
+        ):
+            np.testing.assert_array_equal(
+                mesh.point_data[name], [getattr(i, name) for i in impacts]
+            )
+        np.testing.assert_array_equal(mesh.point_data["normal"][:, :2], [i.normal for i in impacts])
+    assert set(p.celltypes) == {pv.CellType.VERTEX}
+
+
+def test_no_impacts_leaves_an_empty_readable_file(tmp_path: Path) -> None:
+    spec = scene_spec(load_case(CASES / "single-granule.toml"))
+    sim = Simulation(build_scene(spec))
+    recorder = VtkRecorder(tmp_path)
+    recorder.record(sim)
+    recorder.close()
+    recorder.close()  # idempotent
+    impacts = pv.read(tmp_path / "vtk" / "impacts.vtu")
+    assert impacts.n_points == 0
+    assert "normal_impulse" in impacts.point_data
+    assert pv.read(tmp_path / "vtk" / "trajectories.vtu").n_cells == 1
