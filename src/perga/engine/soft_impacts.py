@@ -53,21 +53,24 @@ class SoftImpactLog:
         self._x = granules.x.copy()
         self._v = granules.v.copy()
         self._w = granules.w.copy()
-        self._poly = None
+        self._vertices = granules.polygons.vertices.copy()
+        self._com = granules.polygons.com.copy()
 
     def _energy(self, i: int, v: np.ndarray, w: float) -> float:
         g = self._g
         return float(0.5 * g.m[i] * (v @ v) + 0.5 * g.inertia[i] * w * w)
 
-    def _relative(self, i: int, k: int, x, v, w, n) -> tuple[float, float, tuple[float, float]]:
+    def _relative(
+        self, i: int, k: int, x, v, w, n, com
+    ) -> tuple[float, float, tuple[float, float]]:
         """Normal and tangential velocity of granule i's contact point relative to polygon k's
-        material point there, and the point (m, m/s)."""
+        material point there (polygon centre of mass ``com``), and the point (m/s, m)."""
         p = self._g.polygons
         r = self._g.r[i]
         point = (x[0] - r * n[0], x[1] - r * n[1])
         t = (-n[1], n[0])
-        rel_x = v[0] - w * r * t[0] - (p.velocity[k, 0] - p.omega[k] * (point[1] - p.com[k, 1]))
-        rel_y = v[1] - w * r * t[1] - (p.velocity[k, 1] + p.omega[k] * (point[0] - p.com[k, 0]))
+        rel_x = v[0] - w * r * t[0] - (p.velocity[k, 0] - p.omega[k] * (point[1] - com[1]))
+        rel_y = v[1] - w * r * t[1] - (p.velocity[k, 1] + p.omega[k] * (point[0] - com[0]))
         vn = float(rel_x * n[0] + rel_y * n[1])
         return vn, float(rel_x * t[0] + rel_y * t[1]), (float(point[0]), float(point[1]))
 
@@ -77,7 +80,8 @@ class SoftImpactLog:
         self._x[:] = g.x
         self._v[:] = g.v
         self._w[:] = g.w
-        self._poly = (g.polygons.vertices.copy(), g.polygons.com.copy())
+        self._vertices[:] = g.polygons.vertices
+        self._com[:] = g.polygons.com
 
     def after(self, time: float, angles: np.ndarray) -> None:
         """Open and close impacts after a kernel call; ``time``: end of the step, s;
@@ -92,12 +96,14 @@ class SoftImpactLog:
         self._active = active
 
     def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
-        vertices, _ = self._poly
+        vertices = self._vertices
         p = self._g.polygons
         lo, hi = int(p.start[k]), int(p.start[k + 1])
         _, nx, ny = closest_feature(self._x[i, 0], self._x[i, 1], vertices, lo, hi)
         n = (float(nx), float(ny))
-        vn, vt, point = self._relative(i, k, self._x[i], self._v[i], float(self._w[i]), n)
+        vn, vt, point = self._relative(
+            i, k, self._x[i], self._v[i], float(self._w[i]), n, self._com[k]
+        )
         return _Start(
             time=time,
             normal=n,
@@ -115,7 +121,7 @@ class SoftImpactLog:
             return
         g = self._g
         n = _rotate(start.normal, float(angles[k]) - start.hammer_angle)
-        vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n)
+        vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n, g.polygons.com[k])
         self.impacts.append(
             Impact(
                 time=start.time,
