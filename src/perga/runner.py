@@ -121,7 +121,7 @@ def run_case(
     is also written to summary.json. KeyboardInterrupt and RunStoppedError are recorded in the
     summary and re-raised after everything written so far is flushed."""
     shutil.copyfile(case_path, directory / "case.toml")
-    summary = RunSummary(case=str(case_path))
+    summary = RunSummary(case=str(case_path.resolve()))
     start = time.perf_counter()
     recorders: list[Recorder] = []
     sim: Simulation | None = None

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
+from perga.case.hammer_geometry import hammer_geometry
 from perga.case.placement import initial_state
 from perga.case.schema import Case, ExplicitPlacement, RandomPlacement
 from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
@@ -77,15 +78,12 @@ def _hammers(case: Case) -> list[str]:
         problems.append(
             f"hammers.angles: needs one angle per hammer, {h.count} (got {len(h.angles)})"
         )
-    if h.shape.hinge_offset >= h.shape.length / 2:
-        problems.append(
-            f"hammers.shape.hinge_offset: must be < length/2 = {h.shape.length / 2:g} m "
-            f"(got {h.shape.hinge_offset:g})"
-        )
-    elif case.chamber:
-        reach = math.hypot(
-            h.hinge_radius + h.shape.length - h.shape.hinge_offset, h.shape.width / 2
-        )
+    try:
+        geometry = hammer_geometry(case)
+    except ValueError as exc:
+        return [*problems, f"hammers.shape: {exc}"]
+    if case.chamber:
+        reach = geometry.reach(h.hinge_radius)
         if reach >= case.chamber.radius:
             problems.append(
                 f"hammers: a hammer reaches {reach:.4g} m from the axis, past the chamber wall at "
@@ -240,6 +238,9 @@ def check_case(case: Case) -> list[str]:
     problems = _names(case)
     if problems:
         return problems
-    for check in (_hammers, _granules, _effects, _contact_model, _time_step):
+    problems = _hammers(case)
+    if any(p.startswith("hammers.shape:") for p in problems):
+        return problems  # the later checks need the hammer's geometry
+    for check in (_granules, _effects, _contact_model, _time_step):
         problems += check(case)
     return problems

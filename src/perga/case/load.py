@@ -58,10 +58,12 @@ def _describe(error: dict[str, Any]) -> str:
     return f"{key or '(top level)'}: {message}{got}{expected}"
 
 
-def load_case(path: str | Path) -> Case:
+def load_case(path: str | Path, source_dir: Path | None = None) -> Case:
     """Parse and validate a case file; raises :class:`CaseError` listing every problem.
 
-    The schema's problems are all reported at once; the physical cross-checks
+    Relative geometry paths start at ``source_dir`` (default: the case file's folder; a run
+    directory's copy of a case passes its original folder). The schema's problems are all
+    reported at once; the physical cross-checks
     (:mod:`perga.case.checks`) need valid fields, so they run, all of them, once the schema passes.
     """
     path = Path(path)
@@ -75,6 +77,7 @@ def load_case(path: str | Path) -> Case:
         case = Case.model_validate(data)
     except ValidationError as exc:
         raise CaseError([f"{path}: {_describe(err)}" for err in exc.errors()]) from None
+    case._source_dir = source_dir or path.resolve().parent
     problems = check_case(case)
     if problems:
         raise CaseError([f"{path}: {problem}" for problem in problems])

@@ -7,9 +7,10 @@ range; ``perga schema`` prints the JSON Schema built from these models.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
 
 from perga.analytic.hammer import PlateHammer
 
@@ -74,11 +75,45 @@ class PlateShape(Strict):
     )
 
 
+class FileShape(Strict):
+    """[hammers.shape] with kind = "file": the hammer's shape from a geometry file (geometry/),
+    drawn in the hammer frame (hinge at the origin, hammer axis along +x).
+
+    A closed mesh (.stl, .obj: mass properties from the mesh and the material's density, the
+    outline its section by the rotor plane) or a 2-D outline (.txt points, .svg, .dxf: extruded
+    to ``thickness``). Relative paths are relative to the case file. One convex piece only for
+    now: a concave outline is refused.
+    """
+
+    kind: Literal["file"]
+    path: str = Field(description="geometry file, relative to the case file or absolute")
+    units: Literal["m", "cm", "mm"] = Field("mm", description="length unit of the file")
+    thickness: float | None = Field(
+        None,
+        gt=0,
+        le=1,
+        description="out-of-plane thickness, m, in (0, 1]: outlines only (meshes have their own)",
+    )
+    height: float | None = Field(
+        None, description="meshes: height z of the rotor plane in the file's frame, m after "
+        "scaling; default half-way up the mesh"
+    )
+
+
+HammerShape = Annotated[PlateShape | FileShape, Field(discriminator="kind")]
+
+
 class Hammers(Strict):
     """[hammers]: identical hammers spaced evenly around the rotor."""
 
     count: int = Field(4, ge=1, le=64, description="number of hammers, in [1, 64]")
-    mass: float = Field(gt=0, le=50, description="mass of one hammer, kg, in (0, 50]")
+    mass: float | None = Field(
+        None,
+        gt=0,
+        le=50,
+        description="mass of one hammer, kg, in (0, 50]: plates; a file shape's mass follows "
+        "from its geometry and material density",
+    )
     hinge_radius: float = Field(
         ge=0, le=5, description="radius R of the hinge (or weld) point, m, in [0, 5]"
     )
@@ -111,10 +146,16 @@ class Hammers(Strict):
     hinge_friction: float = Field(
         0.0, ge=0, le=100, description="Coulomb friction torque at the hinge, N·m, in [0, 100]"
     )
-    shape: PlateShape
+    shape: HammerShape
 
     @model_validator(mode="after")
     def _hinge_on_plate(self) -> Hammers:
+        if not isinstance(self.shape, PlateShape):
+            if self.mass is not None:
+                raise ValueError("mass: a file shape's mass follows from its geometry; omit it")
+            return self
+        if self.mass is None:
+            raise ValueError("mass: a plate hammer needs its mass (kg)")
         if self.shape.hinge_offset >= self.shape.length / 2:
             raise ValueError(
                 f"shape.hinge_offset must be < length/2 = {self.shape.length / 2} m "
@@ -410,6 +451,13 @@ class Case(Strict):
     output: Output = Field(default_factory=Output)
     gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")
     paper: PaperStudy | None = Field(None, description="inputs of perga paper-check")
+    _source_dir: Path | None = PrivateAttr(None)
+
+    @property
+    def source_dir(self) -> Path | None:
+        """The folder of the case file it was loaded from (relative geometry paths start
+        there), or None."""
+        return self._source_dir
 
     def contact(self, a: str, b: str) -> ContactPair:
         """The [[contacts]] entry of materials a and b (KeyError if there is none)."""
@@ -450,5 +498,8 @@ class Case(Strict):
 
     @property
     def hammer_plate(self) -> PlateHammer:
-        """The hammer as a plate of its material's density."""
+        """The hammer as a plate of its material's density (plate shapes only: see
+        :func:`perga.case.hammer_geometry.hammer_geometry` for any shape)."""
+        if not isinstance(self.hammers.shape, PlateShape):
+            raise ValueError("hammers.shape: a plate is needed here (kind = 'plate')")
         return self.hammers.plate(self.materials[self.hammers.material].density)

@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_time_step
+from perga.case.hammer_geometry import hammer_geometry
 from perga.case.schema import Case, ExplicitPlacement
 
 MAX_ROTATION_PER_STEP = 0.05
@@ -28,7 +29,7 @@ def fastest_relative_speed(case: Case) -> float:
     """Upper bound on a granule's speed relative to a hammer or the wall, m/s: the hammer tip's
     speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed."""
     h = case.hammers
-    tip = h.hinge_radius + h.shape.length - h.shape.hinge_offset
+    tip = h.hinge_radius + hammer_geometry(case).tip
     speed = case.rotor.angular_velocity * tip + math.hypot(*h.velocity)
     placement = case.granules.placement
     if isinstance(placement, ExplicitPlacement) and placement.velocities:
@@ -37,21 +38,23 @@ def fastest_relative_speed(case: Case) -> float:
 
 
 def thinnest_obstacle(case: Case) -> float:
-    """The thinner of a hammer plate and the chamber wall, m."""
-    hammer = case.hammer_plate.thickness
+    """The thinner of a hammer (its out-of-plane thickness) and the chamber wall, m."""
+    hammer = hammer_geometry(case).thickness
     return min(hammer, case.chamber.wall_thickness) if case.chamber else hammer
 
 
 def hammer_effective_mass(case: Case) -> float:
-    """Smallest effective mass a hammer offers a granule's impact, kg: I_A/reach² for a hinged
-    hammer struck at its tip, M/(1 + M(L/2)²/I_C) for a free one struck at an end, and infinite
-    for a welded one (the rotor's inertia)."""
-    h, plate = case.hammers, case.hammer_plate
+    """Smallest effective mass a hammer offers a granule's impact, kg: I_A/tip² for a hinged
+    hammer struck at its tip, M/(1 + Mρ²/I_C) for a free one struck at its farthest point from
+    the centre of mass (ρ), and infinite for a welded one (the rotor's inertia)."""
+    h, g = case.hammers, hammer_geometry(case)
     if h.mount == "hinged":
-        return plate.inertia_about_hinge / plate.tip_distance**2
+        return g.moment_about_hinge / g.tip**2
     if h.mount == "free":
-        arm = 0.5 * math.hypot(plate.length, plate.width)
-        return plate.mass / (1.0 + plate.mass * arm**2 / plate.inertia_about_centre)
+        cx, cy = g.centre_of_mass
+        arm = max(math.hypot(x - cx, y - cy) for x, y in g.outline)
+        moment = g.moment_about_hinge - g.mass * (cx * cx + cy * cy)
+        return g.mass / (1.0 + g.mass * arm**2 / moment)
     return math.inf
 
 

@@ -1,6 +1,7 @@
 """Case (the validated case file) -> SceneSpec (what the engine builds): the one mapping.
 
-Plate hammers become rectangles in the hammer frame (hinge at the origin, axis +x), spaced
+Hammers take their outline and mass properties from :mod:`perga.case.hammer_geometry` (a plate's
+rectangle, or a geometry file), in the hammer frame (hinge at the origin, axis +x), spaced
 evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
 (:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
 listed in the case, and only those, become the scene's effects; a soft contact model gets its
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from perga.case.hammer_geometry import hammer_geometry
 from perga.case.placement import initial_state
 from perga.case.schema import Case
 from perga.case.timestep import normal_stiffness, step_plan
@@ -30,17 +32,14 @@ from perga.engine.spec import (
 
 
 def _hammers(case: Case) -> tuple[HammerSpec, ...]:
-    h, plate = case.hammers, case.hammer_plate
-    x0, x1 = -h.shape.hinge_offset, h.shape.length - h.shape.hinge_offset
-    y = h.shape.width / 2
-    outline = ((x0, -y), (x1, -y), (x1, y), (x0, y))
+    h, g = case.hammers, hammer_geometry(case)
     angles = h.angles or tuple(2 * math.pi * i / h.count for i in range(h.count))
     return tuple(
         HammerSpec(
-            outline=outline,
-            mass=h.mass,
-            moment_about_hinge=plate.inertia_about_hinge,
-            centre_of_mass=(plate.hinge_to_centre_of_mass, 0.0),
+            outline=g.outline,
+            mass=g.mass,
+            moment_about_hinge=g.moment_about_hinge,
+            centre_of_mass=g.centre_of_mass,
             hinge_radius=h.hinge_radius,
             angle_on_rotor=angle,
             mount=h.mount,

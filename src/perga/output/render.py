@@ -12,6 +12,7 @@ tables do not pose, are not drawn.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -31,6 +32,14 @@ def _table(path: Path) -> np.ndarray:
         raise FileNotFoundError(f"{path}: missing (record it with output.record)")
     data = np.genfromtxt(path, delimiter=",", names=True)
     return np.atleast_1d(data)
+
+
+def _case_folder(run: Path) -> Path | None:
+    """The folder of the case file the run came from (its geometry paths start there)."""
+    summary = run / "summary.json"
+    if not summary.exists():
+        return None
+    return Path(json.loads(summary.read_text())["case"]).parent
 
 
 def _hammer_outline(h: HammerSpec, rotor_angle: float, alpha: float) -> np.ndarray:
@@ -53,7 +62,7 @@ def render(
 ) -> float:
     """Draw run directory ``run`` into the PNG ``out`` (with a colour bar unless ``colorbar`` is
     False); returns the time of the frame drawn, s."""
-    spec = scene_spec(load_case(run / "case.toml"))
+    spec = scene_spec(load_case(run / "case.toml", _case_folder(run)))
     granules = _table(run / "granules.csv")
     hammers = _table(run / "hammers.csv")
     times = np.unique(granules["time"])
