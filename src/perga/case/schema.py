@@ -95,8 +95,9 @@ class FileShape(Strict):
         description="out-of-plane thickness, m, in (0, 1]: outlines only (meshes have their own)",
     )
     height: float | None = Field(
-        None, description="meshes: height z of the rotor plane in the file's frame, m after "
-        "scaling; default half-way up the mesh"
+        None,
+        description="meshes: height z of the rotor plane in the file's frame, m after "
+        "scaling; default half-way up the mesh",
     )
 
 
