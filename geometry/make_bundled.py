@@ -21,7 +21,7 @@ HERE = Path(__file__).resolve().parent
 THICKNESS = 10.0  # mm, hammers and rotor disc
 ROTOR_RADIUS, ROTOR_SECTIONS = 150.0, 256  # mm, sides of the disc polygon
 HOLE_RADIUS, HOLE_SECTIONS, HOLE_PITCH_RADIUS = 8.0, 48, 120.0  # mm
-CHAMBER_RADIUS = 220.0  # mm
+CHAMBER_RADIUS = 300.0  # mm
 
 
 def arc(centre: tuple[float, float], radius: float, start: float, stop: float, n: int):
@@ -72,11 +72,11 @@ def rotor_disc(holes: int) -> trimesh.Trimesh:
 
 
 def screen_chamber_outline(segments: int = 160) -> np.ndarray:
-    """Round chamber of radius 220 mm with a 150 mm wide outlet channel at the bottom closed
-    by the screen at y = -300 mm."""
+    """Round chamber of radius 300 mm with a 150 mm wide outlet channel at the bottom closed
+    by the screen at y = -380 mm."""
     half = np.arcsin(75.0 / CHAMBER_RADIUS)
     wall = arc((0.0, 0.0), CHAMBER_RADIUS, -np.pi / 2 + half, 1.5 * np.pi - half, segments)
-    return np.vstack([wall, [[wall[-1, 0], -300.0], [wall[0, 0], -300.0]]])
+    return np.vstack([wall, [[wall[-1, 0], -380.0], [wall[0, 0], -380.0]]])
 
 
 def svg_path(points: np.ndarray, relative: bool) -> str:

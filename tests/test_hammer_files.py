@@ -1,5 +1,6 @@
 """Hammers from geometry files in case files (perga.case.hammer_geometry): the same hammer as a
-plate and as a mesh gives the same engine hammer; concave and missing files are refused."""
+plate and as a mesh gives the same engine hammer; a concave (stepped) hammer becomes convex
+pieces; missing files are refused."""
 
 import math
 from pathlib import Path
@@ -64,11 +65,25 @@ def test_relative_paths_start_at_the_case_file(tmp_path):
     assert hammer.mass == pytest.approx(7850 * 0.01 * area, rel=1e-9)
 
 
-def test_concave_hammer_is_refused(tmp_path):
+def test_stepped_hammer_is_two_convex_pieces(tmp_path):
+    """geometry/stepped_hammer.stl: a 50 mm shank (x = -15 .. 75 mm) and a 70 mm head (x = 75 ..
+    135 mm), 10 mm thick steel; mass, centre of mass and I_A from the two rectangles (1e-6: the
+    mesh's float32 coordinates)."""
     stl = ROOT / "geometry" / "stepped_hammer.stl"
-    with pytest.raises(CaseError) as info:
-        load_case(_case(tmp_path, _file_shape(str(stl))))
-    assert any("concave" in p and "stepped_hammer.stl" in p for p in info.value.problems)
+    hammer = scene_spec(load_case(_case(tmp_path, _file_shape(str(stl))))).hammers[0]
+    parts = [(-0.015, 0.075, 0.05), (0.075, 0.135, 0.07)]  # x0, x1, width
+    masses = [7850 * 0.01 * (x1 - x0) * w for x0, x1, w in parts]
+    centres = [(x0 + x1) / 2 for x0, x1, _ in parts]
+    moment = sum(
+        m * ((x1 - x0) ** 2 + w**2) / 12 + m * c**2
+        for m, c, (x0, x1, w) in zip(masses, centres, parts, strict=True)
+    )
+    assert hammer.mass == pytest.approx(sum(masses), rel=1e-6)
+    assert hammer.centre_of_mass[0] == pytest.approx(
+        sum(m * c for m, c in zip(masses, centres, strict=True)) / sum(masses), rel=1e-6
+    )
+    assert hammer.moment_about_hinge == pytest.approx(moment, rel=1e-6)
+    assert len(hammer.pieces) == 2
 
 
 def test_missing_file_and_mass_given_are_refused(tmp_path):

@@ -15,6 +15,7 @@ from perga.engine import (
     Simulation,
     build_scene,
 )
+from perga.geometry.polygon import is_convex, signed_area
 from tests.engine.helpers import plate, rectangle
 
 
@@ -97,11 +98,33 @@ def test_hinged_hammer_pose_and_mass_properties() -> None:
     assert scene.pairs == []
 
 
-def test_concave_outline_is_rejected() -> None:
-    """Chipmunk would silently use the hull; the spec refuses instead."""
+def _notched(outline) -> HammerSpec:
+    return HammerSpec(
+        outline=outline, mass=0.05, moment_about_hinge=1e-3, centre_of_mass=(0.05, 0.0),
+        hinge_radius=0.1, angle_on_rotor=0.0, mount="hinged", material="steel",
+    )  # fmt: skip
+
+
+def test_concave_outline_becomes_convex_pieces_on_one_body() -> None:
+    """Chipmunk would silently use the hull of a concave polygon; the spec splits it into
+    convex pieces (their areas add up to the outline's to round-off) and the scene puts one
+    Poly per piece on the hammer's body."""
     notch = ((0.0, -0.01), (0.1, -0.01), (0.1, 0.01), (0.05, 0.0), (0.0, 0.01))
-    with pytest.raises(ValueError, match="convex"):
-        HammerSpec(
-            outline=notch, mass=0.05, moment_about_hinge=1e-3, centre_of_mass=(0.05, 0.0),
-            hinge_radius=0.1, angle_on_rotor=0.0, mount="hinged", material="steel",
-        )  # fmt: skip
+    hammer = _notched(notch)
+    assert len(hammer.pieces) == 2
+    assert all(is_convex(p) for p in hammer.pieces)
+    assert sum(signed_area(p) for p in hammer.pieces) == pytest.approx(
+        signed_area(notch), rel=1e-12
+    )
+    scene = build_scene(SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (), (), dt=1e-5))
+    shapes = scene.hammer_shapes[0]
+    assert len(shapes) == 2
+    assert all(s.body is scene.hammer_bodies[0] for s in shapes)
+    assert all(scene.shape_owner[s] == ("hammer", 0) for s in shapes)
+    assert len(scene.hammer_outlines[0]) == 5
+
+
+def test_self_intersecting_outline_is_refused() -> None:
+    bow_tie = ((0.0, -0.01), (0.1, 0.01), (0.1, -0.01), (0.0, 0.01))
+    with pytest.raises(ValueError, match="cross"):
+        _notched(bow_tie)

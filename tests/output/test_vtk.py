@@ -131,8 +131,8 @@ def snapshot(sim: Simulation) -> Frame:
         velocities=sim.granule_velocities(),
         angular_velocities=sim.granule_angular_velocities(),
         hammer_vertices=[
-            np.array([tuple(s.body.local_to_world(v)) for v in s.get_vertices()]) * u.LENGTH
-            for s in scene.hammer_shapes
+            np.array([tuple(b.local_to_world(v)) for v in outline]) * u.LENGTH
+            for b, outline in zip(scene.hammer_bodies, scene.hammer_outlines, strict=True)
         ],
         swing_angles=sim.hammer_swing_angles(),
         hammer_spin=sim.hammer_angular_velocities(),

@@ -121,7 +121,7 @@ def test_poses_within_a_call_are_rigid_motion():
     table, dt = _linear(0.6, friction=0.4)
     local = _hexagon(0.008)
     x = _lattice(-0.02, 0.02, -0.02, 0.02, 2.1 * R)
-    x = x[[closest_feature(p[0], p[1], local, 0, 6)[0] > 1.1 * R for p in x]]
+    x = x[[_distance(p, local) > 1.1 * R for p in x]]
     velocity, omega = np.array([3.0, -1.0]), 400.0
     pivot = np.array([0.004, 0.001])
 
@@ -268,6 +268,12 @@ def test_tangential_impulse_of_a_sliding_hit():
     assert row[HIST_TANGENTIAL_IMPULSE] == pytest.approx(friction * row[HIST_NORMAL_IMPULSE], 1e-2)
 
 
+def _distance(point, vertices):
+    """Distance of ``point`` from the convex polygon ``vertices`` (< 0 inside), m."""
+    arrays = polygon_set([vertices], np.zeros((1, 2)), kind=[KINEMATIC]).arrays()
+    return closest_feature(point[0], point[1], arrays, 0)[0]
+
+
 def _lattice(x0, x1, y0, y1, pitch):
     """Hexagonal lattice of points in [x0, x1] × [y0, y1] with the given pitch, m."""
     rows = np.arange(y0, y1, pitch * math.sqrt(3.0) / 2.0)
@@ -293,7 +299,7 @@ def test_every_overlap_is_a_contact_with_a_fast_polygon():
     plate = _box(length, width)
     x = _lattice(-0.03, 0.03, -0.03, 0.03, 2.1 * R)
     x = x[np.hypot(*x.T) < 0.03 - 1.1 * R]
-    x = x[[closest_feature(p[0], p[1], plate, 0, 4)[0] > 1.1 * R for p in x]]
+    x = x[[_distance(p, plate) > 1.1 * R for p in x]]
     speed, omega = 2.0, 500.0
     polys = polygon_set(
         [plate], np.zeros((1, 2)), kind=[KINEMATIC], velocity=np.array([[speed, 0.0]]),
@@ -304,7 +310,7 @@ def test_every_overlap_is_a_contact_with_a_fast_polygon():
     checked = 0
     for _ in range(100):
         g.step(40)
-        d = np.array([closest_feature(p[0], p[1], polys.vertices, 0, 4)[0] for p in g.x])
+        d = np.array([closest_feature(p[0], p[1], polys.arrays(), 0)[0] for p in g.x])
         approach = dt * (np.hypot(*g.v.T) + speed + abs(omega) * rho)
         deep = R - d > approach
         assert np.all(g.polygon_hist[deep, 0, HIST_ACTIVE] == 1.0)

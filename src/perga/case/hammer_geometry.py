@@ -4,7 +4,8 @@ A plate (``hammers.shape.kind = "plate"``) from its closed forms (:class:`~perga
 hammer.PlateHammer`); a file shape from :mod:`perga.geometry`: a closed mesh gives its section by
 the rotor plane and its mass properties with the hammer material's density, a 2-D outline its
 extrusion to ``thickness``. Either way the hinge is the origin of the file's frame and the
-hammer axis is +x. Only convex outlines are accepted for now (one Pymunk polygon per hammer).
+hammer axis is +x. A concave outline is split into convex pieces by the engine
+(:class:`~perga.engine.spec.HammerSpec`).
 """
 
 from __future__ import annotations
@@ -14,13 +15,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-import numpy as np
-
 from perga.case.schema import Case, FileShape, PlateShape
-from perga.geometry.convex import decompose
 from perga.geometry.mass import load_mesh, mesh_mass_properties
 from perga.geometry.outline import read_outline
-from perga.geometry.polygon import is_convex
+from perga.geometry.polygon import counter_clockwise
 from perga.geometry.properties import MassProperties, extruded_properties
 from perga.geometry.section import section_mesh
 
@@ -30,9 +28,10 @@ Vec2 = tuple[float, float]
 
 @dataclass(frozen=True)
 class HammerGeometry:
-    """outline: convex, counter-clockwise, hammer frame, m; mass, kg; moment_about_hinge, kg·m²;
-    centre_of_mass: hammer frame, m; thickness: out of the plane, m; tip: largest distance of the
-    outline along the axis from the hinge, m; source: the file, or "plate"."""
+    """outline: simple polygon, counter-clockwise, hammer frame, m; mass, kg;
+    moment_about_hinge, kg·m²; centre_of_mass: hammer frame, m; thickness: out of the plane,
+    m; tip: largest distance of the outline along the axis from the hinge, m; source: the
+    file, or "plate"."""
 
     outline: tuple[Vec2, ...]
     mass: float
@@ -86,13 +85,7 @@ def _from_file(path: str, shape: FileShape, density: float) -> HammerGeometry:
         outline = read_outline(path, shape.units, hinge=(0.0, 0.0)).vertices
         props = extruded_properties(outline, shape.thickness, density)
         thickness = shape.thickness
-    if not is_convex(outline):
-        pieces = len(decompose(outline))
-        raise ValueError(
-            f"{path}: the hammer outline is concave ({pieces} convex pieces); hammers of "
-            "several convex pieces are not supported yet"
-        )
-    points = np.asarray(outline, dtype=float)
+    points = counter_clockwise(outline)
     return HammerGeometry(
         outline=tuple((float(x), float(y)) for x, y in points),
         mass=props.mass,

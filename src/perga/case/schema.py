@@ -81,8 +81,8 @@ class FileShape(Strict):
 
     A closed mesh (.stl, .obj: mass properties from the mesh and the material's density, the
     outline its section by the rotor plane) or a 2-D outline (.txt points, .svg, .dxf: extruded
-    to ``thickness``). Relative paths are relative to the case file. One convex piece only for
-    now: a concave outline is refused.
+    to ``thickness``). Relative paths are relative to the case file. A concave outline is
+    split into convex pieces.
     """
 
     kind: Literal["file"]

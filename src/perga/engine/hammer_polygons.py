@@ -1,6 +1,6 @@
 """The hammers as soft-contact polygons: posed from their Pymunk bodies, loaded back onto them.
 
-Each hammer's convex outline becomes one polygon of a :class:`~perga.soft.polygons.PolygonSet`
+Each convex piece of each hammer becomes one polygon of a :class:`~perga.soft.polygons.PolygonSet`
 (SI), described relative to its body's centre of gravity. How a hammer resists a contact sets
 the contact's effective mass: a hinged hammer is ``PINNED`` at its hinge with I_A; a welded one
 is part of the rotor, ``KINEMATIC`` on a rotor held at ω or ``PINNED`` at the axis with the
@@ -25,7 +25,7 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.scene import Scene
-from perga.soft.polygons import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
+from perga.soft.polygons import FREE, KINEMATIC, PINNED, PolygonSet, piece_features, polygon_set
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit."""
@@ -38,7 +38,10 @@ def _counter_clockwise(vertices: np.ndarray) -> np.ndarray:
 
 
 class HammerPolygons:
-    """The scene's hammers as a posed ``PolygonSet`` (``self.polygons``), polygon i = hammer i.
+    """The scene's hammers as a posed ``PolygonSet`` (``self.polygons``): every convex piece of
+    every hammer is a polygon, ``hammer_of[k]`` the hammer polygon k belongs to; pieces of one
+    hammer share its body's motion and inertia, and only the hammer's outline makes contacts
+    (``perga.soft.polygons.piece_features``).
 
     ``materials`` lists the hammers' material names (the polygon table's columns).
     """
@@ -49,38 +52,50 @@ class HammerPolygons:
         specs = scene.spec.hammers
         self.materials = sorted({h.material for h in specs})
         driven = scene.rotor.body_type == pymunk.Body.DYNAMIC
-        relative, kinds, mass, inertia = [], [], [], []
-        for h, body, shape in zip(specs, self._bodies, scene.hammer_shapes, strict=True):
+        relative, owner, kinds, inertia, solid, corner = [], [], [], [], [], []
+        for index, (h, body, shapes) in enumerate(
+            zip(specs, self._bodies, scene.hammer_shapes, strict=True)
+        ):
             cog = body.center_of_gravity
-            local = np.array([tuple(v - cog) for v in shape.get_vertices()]) * u.LENGTH
-            relative.append(_counter_clockwise(local))
+            pieces = [
+                _counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()]))
+                * u.LENGTH
+                for s in shapes
+            ]
+            outline = (np.array(scene.hammer_outlines[index]) - tuple(cog)) * u.LENGTH
+            features = piece_features(pieces, [_counter_clockwise(outline)])
+            offset = sum(len(r) for r in relative)
+            solid.append(features[0])
+            corner.append(np.where(features[1] >= 0, features[1] + offset, -1))
+            relative += pieces
+            owner += [index] * len(pieces)
             if h.mount == "hinged":
-                kinds.append(PINNED)
-                inertia.append(h.moment_about_hinge)
+                kind, moment = PINNED, h.moment_about_hinge
             elif h.mount == "free":
-                kinds.append(FREE)
-                inertia.append(h.moment_about_centre)
+                kind, moment = FREE, h.moment_about_centre
             elif driven:
-                kinds.append(PINNED)
-                inertia.append(body.moment * u.MOMENT)
+                kind, moment = PINNED, body.moment * u.MOMENT
             else:
-                kinds.append(KINEMATIC)
-                inertia.append(math.inf)
-            mass.append(h.mass)
+                kind, moment = KINEMATIC, math.inf
+            kinds += [kind] * len(pieces)
+            inertia += [moment] * len(pieces)
+        self.hammer_of = np.array(owner, dtype=np.int64)
+        """The hammer of each polygon."""
         self._relative = np.concatenate(relative)
-        self._owner = np.repeat(np.arange(len(relative)), [len(r) for r in relative])
+        self._owner = np.repeat(self.hammer_of, [len(r) for r in relative])
         self._hinges = np.array(
             [h.hinge_position if h.mount == "hinged" else (0.0, 0.0) for h in specs], dtype=float
         ).reshape(-1, 2)
-        self.machine = np.array([h.mount != "free" for h in specs], dtype=bool)
-        """Which hammers the rotor drives (hinged or welded): their loads enter the drive work."""
+        self.machine = np.array([specs[k].mount != "free" for k in owner], dtype=bool)
+        """Which polygons the rotor drives (hinged or welded): their loads enter the drive work."""
         self.polygons: PolygonSet = polygon_set(
             relative,
             np.zeros((len(relative), 2)),
             kind=kinds,
-            mass=mass,
+            mass=[specs[k].mass for k in owner],
             inertia=inertia,
-            mat=[self.materials.index(h.material) for h in specs],
+            mat=[self.materials.index(specs[k].material) for k in owner],
+            features=(np.concatenate(solid), np.concatenate(corner)),
         )
         self.pose(0.0)
 
@@ -101,16 +116,16 @@ class HammerPolygons:
         angle = state[:, 2] + omega * ahead
         c, s = np.cos(angle)[self._owner], np.sin(angle)[self._owner]
         rx, ry = self._relative[:, 0], self._relative[:, 1]
-        p = self.polygons
+        p, of = self.polygons, self.hammer_of
         p.vertices[:, 0] = centre[self._owner, 0] + c * rx - s * ry
         p.vertices[:, 1] = centre[self._owner, 1] + s * rx + c * ry
-        p.com[:] = centre
-        p.velocity[:] = velocity
-        p.omega[:] = omega
+        p.com[:] = centre[of]
+        p.velocity[:] = velocity[of]
+        p.omega[:] = omega[of]
         rotor = self._scene.rotor
         turn = rotor.angle + rotor.angular_velocity * u.ANGULAR_VELOCITY * ahead
         cr, sr = math.cos(turn), math.sin(turn)
-        hx, hy = self._hinges[:, 0], self._hinges[:, 1]
+        hx, hy = self._hinges[of, 0], self._hinges[of, 1]
         p.pivot[:, 0] = cr * hx - sr * hy
         p.pivot[:, 1] = sr * hx + cr * hy
 
@@ -120,8 +135,8 @@ class HammerPolygons:
         the rotor drives, N·m."""
         p = self.polygons
         loads: dict[pymunk.Body, list[float]] = {}
-        for k, body in enumerate(self._bodies):
-            load = loads.setdefault(body, [0.0, 0.0, 0.0])
+        for k, hammer in enumerate(self.hammer_of):
+            load = loads.setdefault(self._bodies[hammer], [0.0, 0.0, 0.0])
             load[0] += p.force[k, 0]
             load[1] += p.force[k, 1]
             load[2] += p.torque[k]

@@ -6,11 +6,14 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
   its own (a rotor disc is out of the granules' plane).
 * Hammers, by mount:
 
+  Each convex piece of the hammer's outline (``HammerSpec.pieces``) is one ``Poly`` on the
+  hammer's body.
+
   - ``hinged``: a dynamic body whose local origin is the hinge, with mass, centre of gravity
     and the moment about the centre of mass I_C = I_A − M|c|² from the spec, pinned to the
     rotor by a ``PivotJoint`` at the hinge. It starts co-rotating with the rotor. With
     ``swing_limit`` a ``RotaryLimitJoint`` to the rotor stops it at α = ±swing_limit.
-  - ``welded``: the hammer's polygon is attached to the rotor body itself (its outline
+  - ``welded``: the hammer's polygons are attached to the rotor body itself (its outline
     transformed into the rotor frame). At constant ω this is exactly rigid (no joint error,
     no solver iterations), and the hammer's mass properties are irrelevant because the
     kinematic rotor has infinite inertia. A future dynamic rotor must add them to the rotor.
@@ -52,7 +55,7 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.effects import Effect, SwingStops, build_effects
-from perga.engine.spec import ChamberSpec, GranuleSpec, HammerSpec, SceneSpec
+from perga.engine.spec import ChamberSpec, GranuleSpec, HammerSpec, SceneSpec, Vec2
 
 Kind = Literal["granule", "hammer", "wall"]
 Phase = Literal["begin", "pre_solve", "post_solve", "separate"]
@@ -66,7 +69,9 @@ GRANULE_GROUP = 2
 class Scene:
     """The pymunk objects of one scene, plus the bookkeeping recorders need.
 
-    ``hammer_bodies[i]`` is the rotor body for a welded hammer. ``shape_owner`` maps every
+    ``hammer_bodies[i]`` is the rotor body for a welded hammer; ``hammer_shapes[i]`` are hammer
+    i's convex pieces, ``hammer_outlines[i]`` its whole outline in its body's frame (internal
+    units). ``shape_owner`` maps every
     granule and hammer shape to (kind, index into the spec's list); ``wall_shapes`` are the
     chamber's. ``collision_types`` maps (kind, material) to the Chipmunk collision type;
     ``pairs`` lists the (type_a, type_b) handlers installed, type_a being a granule type.
@@ -77,7 +82,8 @@ class Scene:
     space: pymunk.Space
     rotor: pymunk.Body
     hammer_bodies: list[pymunk.Body]
-    hammer_shapes: list[pymunk.Poly]
+    hammer_shapes: list[tuple[pymunk.Poly, ...]]
+    hammer_outlines: list[list[tuple[float, float]]]
     joints: list[pymunk.Constraint]
     granule_bodies: list[pymunk.Body]
     granule_shapes: list[pymunk.Circle]
@@ -217,14 +223,18 @@ def build_scene(spec: SceneSpec) -> Scene:
 
     shape_owner: dict[pymunk.Shape, tuple[Kind, int]] = {}
     hammer_bodies: list[pymunk.Body] = []
-    hammer_shapes: list[pymunk.Poly] = []
+    hammer_shapes: list[tuple[pymunk.Poly, ...]] = []
+    hammer_outlines: list[list[tuple[float, float]]] = []
     joints: list[pymunk.Constraint] = []
     stops: list[pymunk.RotaryLimitJoint] = []
     for index, h in enumerate(spec.hammers):
-        shape, body, joint = _build_hammer(h, rotor, omega)
+        body, place, joint = _build_hammer(h, rotor, omega)
         if body is not rotor:
             space.add(body)
-        add_shape(shape, "hammer", h.material, HAMMER_GROUP)
+        shapes = tuple(pymunk.Poly(body, [place(v) for v in piece]) for piece in h.pieces)
+        for shape in shapes:
+            add_shape(shape, "hammer", h.material, HAMMER_GROUP)
+            shape_owner[shape] = ("hammer", index)
         if joint is not None:
             space.add(joint)
             joints.append(joint)
@@ -232,8 +242,8 @@ def build_scene(spec: SceneSpec) -> Scene:
                 stops.append(_build_stops(h, rotor, body))
                 space.add(stops[-1])
         hammer_bodies.append(body)
-        hammer_shapes.append(shape)
-        shape_owner[shape] = ("hammer", index)
+        hammer_shapes.append(shapes)
+        hammer_outlines.append([place(v) for v in h.outline])
 
     granule_bodies: list[pymunk.Body] = []
     granule_shapes: list[pymunk.Circle] = []
@@ -259,6 +269,7 @@ def build_scene(spec: SceneSpec) -> Scene:
         rotor=rotor,
         hammer_bodies=hammer_bodies,
         hammer_shapes=hammer_shapes,
+        hammer_outlines=hammer_outlines,
         joints=joints,
         granule_bodies=granule_bodies,
         granule_shapes=granule_shapes,
@@ -287,16 +298,21 @@ def build_scene(spec: SceneSpec) -> Scene:
 
 def _build_hammer(
     h: HammerSpec, rotor: pymunk.Body, omega: float
-) -> tuple[pymunk.Poly, pymunk.Body, pymunk.Constraint | None]:
+) -> tuple[pymunk.Body, Callable[[Vec2], Vec2], pymunk.Constraint | None]:
+    """The hammer's body (the rotor for a welded one), the map of a hammer-frame point (m) to
+    the body's frame (internal units), and its hinge joint (None unless hinged)."""
     hinge = u.vec_to_internal(h.hinge_position, u.LENGTH)
-    outline = [u.vec_to_internal(v, u.LENGTH) for v in h.outline]
     axis_angle = h.angle_on_rotor + h.swing_angle
     if h.mount == "welded":
-        vertices = [
-            (hinge[0] + x, hinge[1] + y)
-            for x, y in (_rotate(vx, vy, axis_angle) for vx, vy in outline)
-        ]
-        return pymunk.Poly(rotor, vertices), rotor, None
+
+        def on_rotor(v: Vec2) -> Vec2:
+            x, y = _rotate(*u.vec_to_internal(v, u.LENGTH), axis_angle)
+            return (hinge[0] + x, hinge[1] + y)
+
+        return rotor, on_rotor, None
+
+    def on_hammer(v: Vec2) -> Vec2:
+        return u.vec_to_internal(v, u.LENGTH)
 
     body = pymunk.Body(
         u.to_internal(h.mass, u.MASS), u.to_internal(h.moment_about_centre, u.MOMENT)
@@ -305,18 +321,17 @@ def _build_hammer(
     body.center_of_gravity = u.vec_to_internal(h.centre_of_mass, u.LENGTH)
     body.angle = axis_angle
     body.position = hinge
-    shape = pymunk.Poly(body, outline)
     if h.mount == "free":
         body.velocity = u.vec_to_internal(h.velocity, u.VELOCITY)
         body.angular_velocity = u.to_internal(h.angular_velocity, u.ANGULAR_VELOCITY)
-        return shape, body, None
+        return body, on_hammer, None
     # hinged: co-rotate with the rotor (velocity of the centre of gravity = ω × r_cog)
     cog = body.local_to_world(body.center_of_gravity)
     body.velocity = (-omega * cog.y, omega * cog.x)
     body.angular_velocity = omega
     joint = pymunk.PivotJoint(rotor, body, hinge, (0.0, 0.0))
     joint.collide_bodies = False
-    return shape, body, joint
+    return body, on_hammer, joint
 
 
 def _build_stops(h: HammerSpec, rotor: pymunk.Body, body: pymunk.Body) -> pymunk.RotaryLimitJoint:

@@ -101,9 +101,9 @@ def _granule_energy(body: pymunk.Body) -> float:
 def hammer_energy(scene: Scene, index: int) -> float:
     """½Mv_c² + ½I_cΩ² of hammer ``index`` now, J (welded ones: moving with the rotor)."""
     spec = scene.spec.hammers[index]
-    body, shape = scene.hammer_bodies[index], scene.hammer_shapes[index]
+    body = scene.hammer_bodies[index]
     centre = (
-        _welded_com(spec, shape)
+        _welded_com(spec, body)
         if body is scene.rotor
         else body.local_to_world(body.center_of_gravity)
     )
@@ -277,19 +277,14 @@ class Simulation:
         """Centre-of-mass velocity of each hammer, (n, 2) array, m/s (welded: the rotor's
         velocity at the hammer's centre of mass)."""
         out = []
-        for spec, body, shape in zip(
-            self.scene.spec.hammers,
-            self.scene.hammer_bodies,
-            self.scene.hammer_shapes,
-            strict=True,
-        ):
+        for spec, body in zip(self.scene.spec.hammers, self.scene.hammer_bodies, strict=True):
             if body is self.scene.rotor:
-                out.append(tuple(body.velocity_at_world_point(_welded_com(spec, shape))))
+                out.append(tuple(body.velocity_at_world_point(_welded_com(spec, body))))
             else:
                 out.append(tuple(body.velocity))
         return np.array(out, dtype=float).reshape(-1, 2) * u.VELOCITY
 
 
-def _welded_com(spec: HammerSpec, shape: pymunk.Poly) -> pymunk.Vec2d:
+def _welded_com(spec: HammerSpec, rotor: pymunk.Body) -> pymunk.Vec2d:
     """World position (internal units) of a welded hammer's centre of mass."""
-    return shape.body.local_to_world(u.vec_to_internal(spec.centre_on_rotor, u.LENGTH))
+    return rotor.local_to_world(u.vec_to_internal(spec.centre_on_rotor, u.LENGTH))

@@ -40,13 +40,15 @@ def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
 
 
 class SoftImpactLog:
-    """Impacts of ``granules`` on the polygons of ``granules.polygons``; call :meth:`before`
-    before and :meth:`after` after every kernel call. ``hammer_energy(k)`` gives hammer k's
-    kinetic energy now, J."""
+    """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
+    of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
+    its own); call :meth:`before` before and :meth:`after` after every kernel call.
+    ``hammer_energy(h)`` gives hammer h's kinetic energy now, J."""
 
-    def __init__(self, granules: SoftGranules, hammer_energy) -> None:
+    def __init__(self, granules: SoftGranules, hammer_of: np.ndarray, hammer_energy) -> None:
         self.impacts: list[Impact] = []
         self._g = granules
+        self._hammer_of = hammer_of
         self._hammer_energy = hammer_energy
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
         self._open: dict[tuple[int, int], _Start] = {}
@@ -88,18 +90,20 @@ class SoftImpactLog:
         ``angles``: each hammer's body angle now, rad."""
         g = self._g
         hist = g.polygon_hist
-        active = hist[:, :, HIST_ACTIVE] != 0.0
+        active = (hist[:, :, HIST_ACTIVE] != 0.0) & (self._hammer_of >= 0)
         for i, k in zip(*np.nonzero(self._active & ~active), strict=True):
             self._close(int(i), int(k), hist[i, k], angles)
         for i, k in zip(*np.nonzero(active & ~self._active), strict=True):
-            self._open[(int(i), int(k))] = self._start(int(i), int(k), time, angles[k])
+            angle = angles[self._hammer_of[k]]
+            self._open[(int(i), int(k))] = self._start(int(i), int(k), time, angle)
         self._active = active
 
     def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
-        vertices = self._vertices
-        p = self._g.polygons
-        lo, hi = int(p.start[k]), int(p.start[k + 1])
-        _, nx, ny = closest_feature(self._x[i, 0], self._x[i, 1], vertices, lo, hi)
+        before = (self._vertices, *self._g.polygons.arrays()[1:])
+        d, nx, ny = closest_feature(self._x[i, 0], self._x[i, 1], before, k)
+        if not math.isfinite(d):  # before the call the centre faced another piece's feature
+            now = self._g.polygons.arrays()
+            _, nx, ny = closest_feature(self._g.x[i, 0], self._g.x[i, 1], now, k)
         n = (float(nx), float(ny))
         vn, vt, point = self._relative(
             i, k, self._x[i], self._v[i], float(self._w[i]), n, self._com[k]
@@ -112,7 +116,7 @@ class SoftImpactLog:
             tangential_velocity=vt,
             point=point,
             granule_energy=self._energy(i, self._v[i], float(self._w[i])),
-            hammer_energy=self._hammer_energy(k),
+            hammer_energy=self._hammer_energy(int(self._hammer_of[k])),
         )
 
     def _close(self, i: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
@@ -120,13 +124,14 @@ class SoftImpactLog:
         if start is None:  # began before the log (not expected: it starts with the run)
             return
         g = self._g
-        n = _rotate(start.normal, float(angles[k]) - start.hammer_angle)
+        hammer = int(self._hammer_of[k])
+        n = _rotate(start.normal, float(angles[hammer]) - start.hammer_angle)
         vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n, g.polygons.com[k])
         self.impacts.append(
             Impact(
                 time=start.time,
                 granule=i,
-                hammer=k,
+                hammer=hammer,
                 normal_velocity_before=start.normal_velocity,
                 normal_velocity_after=vn,
                 tangential_velocity_before=start.tangential_velocity,

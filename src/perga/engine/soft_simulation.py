@@ -55,7 +55,7 @@ class SoftSimulation(Simulation):
         self._kicks = [e for e in scene.effects if isinstance(e, Kick)]
         self._kick_positions = any(k.needs_positions for k in self._kicks)
         self.log = (
-            SoftImpactLog(self.granules, lambda k: hammer_energy(scene, k))
+            SoftImpactLog(self.granules, self.hammers.hammer_of, lambda k: hammer_energy(scene, k))
             if record_impacts
             else None
         )

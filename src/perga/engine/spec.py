@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from perga.analytic.common import STANDARD_GRAVITY
+from perga.geometry.convex import decompose
+from perga.geometry.polygon import clean, counter_clockwise, self_intersection
 
 Vec2 = tuple[float, float]
 Mount = Literal["hinged", "welded", "free"]
@@ -33,24 +35,13 @@ def _positive(problems: list[str], name: str, value: float, unit: str = "") -> N
         problems.append(f"{name} must be finite and > 0{' ' + unit if unit else ''} (got {value})")
 
 
+def _points(array) -> tuple[Vec2, ...]:
+    return tuple((float(x), float(y)) for x, y in array)
+
+
 def _finite_vec(problems: list[str], name: str, value: Vec2) -> None:
     if len(value) != 2 or not all(math.isfinite(c) for c in value):
         problems.append(f"{name} must be two finite numbers (got {value!r})")
-
-
-def _is_convex(outline: tuple[Vec2, ...]) -> bool:
-    """True for a simple convex polygon (either winding; collinear vertices allowed)."""
-    n = len(outline)
-    signs = set()
-    turning = 0.0
-    for i in range(n):
-        (x0, y0), (x1, y1), (x2, y2) = outline[i], outline[(i + 1) % n], outline[(i + 2) % n]
-        cross = (x1 - x0) * (y2 - y1) - (y1 - y0) * (x2 - x1)
-        if cross != 0.0:
-            signs.add(cross > 0)
-        turning += math.atan2(cross, (x1 - x0) * (x2 - x1) + (y1 - y0) * (y2 - y1))
-    # one turning direction and a total turn of exactly ±2π (excludes star polygons)
-    return len(signs) == 1 and abs(abs(turning) - 2 * math.pi) < 1e-6
 
 
 @dataclass(frozen=True)
@@ -74,9 +65,11 @@ class RotorSpec:
 
 @dataclass(frozen=True)
 class HammerSpec:
-    """A hammer: a convex polygon mounted on the rotor.
+    """A hammer: a polygon mounted on the rotor.
 
-    outline: convex polygon vertices (m) in the hammer frame (hinge at origin, axis +x);
+    outline: vertices of a simple polygon (m) in the hammer frame (hinge at origin, axis +x),
+    stored counter-clockwise without collinear vertices; ``pieces`` are its convex pieces (the
+    outline itself when convex; Chipmunk and the soft contacts take convex polygons only);
     mass: kg; moment_about_hinge: I_A, kg·m² (> mass·|centre_of_mass|²);
     centre_of_mass: (m) in the hammer frame; hinge_radius: distance of the hinge from the
     rotor axis, m (>= 0); angle_on_rotor: polar angle of the hinge, rad;
@@ -101,6 +94,7 @@ class HammerSpec:
     swing_limit: float | None = None
     velocity: Vec2 = (0.0, 0.0)
     angular_velocity: float = 0.0
+    pieces: tuple[tuple[Vec2, ...], ...] = field(init=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "outline", tuple(tuple(map(float, v)) for v in self.outline))
@@ -109,11 +103,14 @@ class HammerSpec:
             problems.append(f"outline needs >= 3 vertices (got {len(self.outline)})")
         for i, vertex in enumerate(self.outline):
             _finite_vec(problems, f"outline[{i}]", vertex)  # type: ignore[arg-type]
-        if not problems and not _is_convex(self.outline):
-            problems.append(
-                "outline must be a convex polygon (Chipmunk silently replaces a concave one "
-                "by its hull): decompose it into convex parts"
-            )
+        if not problems:
+            crossing = self_intersection(self.outline)
+            if crossing is not None:
+                problems.append(f"outline edges {crossing[0]} and {crossing[1]} cross")
+            else:
+                outline = clean(counter_clockwise(self.outline))
+                object.__setattr__(self, "outline", _points(outline))
+                object.__setattr__(self, "pieces", tuple(_points(q) for q in decompose(outline)))
         _positive(problems, "mass", self.mass, "kg")
         _finite_vec(problems, "centre_of_mass", self.centre_of_mass)
         if not problems:

@@ -135,11 +135,9 @@ def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
         np.maximum(overlap, walls.max(axis=1), out=overlap)
     active = g.polygon_hist[:, :, pg.HIST_ACTIVE] != 0.0
     count += np.count_nonzero(active, axis=1)
-    polys = g._poly[0]
+    polys = g._poly[0].arrays()
     for a, k in np.argwhere(active):
-        d, _, _ = pg.closest_feature(
-            g.x[a, 0], g.x[a, 1], polys.vertices, polys.start[k], polys.start[k + 1]
-        )
+        d, _, _ = pg.closest_feature(g.x[a, 0], g.x[a, 1], polys, k)
         overlap[a] = max(overlap[a], g.r[a] - d)
     return count.astype(np.int32), overlap
 
@@ -254,10 +252,8 @@ def machine_mesh(sim: Simulation) -> pv.UnstructuredGrid:
     hinges = {j.b: j for j in scene.joints if isinstance(j, pymunk.PivotJoint)}
     outlines: list[FloatArray] = []
     force: list[float] = []
-    for body, shape in zip(scene.hammer_bodies, scene.hammer_shapes, strict=True):
-        outlines.append(
-            np.array([tuple(body.local_to_world(v)) for v in shape.get_vertices()]) * u.LENGTH
-        )
+    for body, outline in zip(scene.hammer_bodies, scene.hammer_outlines, strict=True):
+        outlines.append(np.array([tuple(body.local_to_world(v)) for v in outline]) * u.LENGTH)
         joint = hinges.get(body)
         force.append(0.0 if joint is None else joint.impulse * u.IMPULSE / sim.dt)
     rotor = scene.rotor

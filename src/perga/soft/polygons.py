@@ -23,6 +23,14 @@ largest signed distance), overlap δ = r − s. The force acts at the middle of 
 p = x − (r − δ⁺/2) n (the disc's surface point while δ ≤ 0), with the contact's effective mass
 m_eff = 1/(1/m_i + 1/m_p).
 
+Bodies of several convex pieces (a concave hammer, a chamber wall of segments): each piece is
+a polygon, and only the body's outline makes contacts. Edges inside the body (seams between
+pieces) are not solid; a corner contact counts only on the piece that owns a convex corner of
+the outline, and only while the disc centre lies in that corner's region of the outline (between
+the normals of the outline's two edges there). So a disc touching one face or corner of the
+outline gets one contact whichever pieces it overlaps, and a disc in a concave notch gets one
+per face it touches (``piece_features``; ``PolygonSet.solid`` and ``corner``).
+
 Contact law: ``perga.soft.contacts.contact_force``, the same law (and the same time
 discretisation and dissipation) as granule pairs and walls, clamped at zero (``end="force"``,
 the default of ``contact_table``) or not (``end="overlap"``: max(0, ·) below is dropped and the
@@ -126,7 +134,12 @@ class PolygonSet:
     omega (n_poly,): angular velocity, rad/s; kind (n_poly,) int32: FREE, PINNED or KINEMATIC;
     mass (n_poly,): M, kg (FREE only); inertia (n_poly,): I_c about com (FREE) or I_A about the
     pivot (PINNED), kg·m²; pivot (n_poly, 2): hinge position A, m (PINNED only);
-    mat (n_poly,) int32: material index (column of the ``ContactTable``).
+    mat (n_poly,) int32: material index (column of the ``ContactTable``);
+    solid (n_vertices,) int8: 1 where the edge from this vertex to the next is on the outline
+    of the body, 0 on a seam between convex pieces of one body (never a contact);
+    corner (n_vertices, 2) int64: for a vertex this polygon owns as a convex corner of its
+    body's outline, the indices (into ``vertices``) of the outline's vertices before and after
+    it (the corner's region lies between their edges' normals), else (−1, −1).
     Loads on each polygon: force (n_poly, 2), N; torque (n_poly,) about com, N·m; moment
     (n_poly,) about the world origin (0, 0), N·m. ``polygon_contacts`` adds to them (zero them
     with ``clear_loads`` first); ``SoftGranules.step`` sets them to the mean over its call.
@@ -146,6 +159,8 @@ class PolygonSet:
     inertia: np.ndarray
     pivot: np.ndarray
     mat: np.ndarray
+    solid: np.ndarray
+    corner: np.ndarray
     force: np.ndarray = field(init=False)
     torque: np.ndarray = field(init=False)
     moment: np.ndarray = field(init=False)
@@ -195,6 +210,8 @@ class PolygonSet:
             self.inertia,
             self.pivot,
             self.mat,
+            self.solid,
+            self.corner,
         )
 
     def loads(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -218,12 +235,16 @@ def polygon_set(
     velocity: np.ndarray | None = None,
     omega: np.ndarray | None = None,
     mat: list[int] | np.ndarray | None = None,
+    features: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PolygonSet:
     """Build a ``PolygonSet`` from a list of (m_k, 2) world-vertex arrays and per-polygon data.
 
     Checks that each polygon has at least 3 vertices, is counter-clockwise and convex, and that
     FREE polygons have M > 0 and I_c > 0 and PINNED ones I_A > 0 (``math.inf`` is allowed and makes
     the body kinematic for the contact). Missing velocities default to zero, materials to 0.
+    features: (solid, corner) over all vertices (``PolygonSet`` doc, e.g. from
+    ``piece_features``); default: every polygon a whole body (all edges solid, every vertex its
+    own corner).
     """
     n_poly = len(vertices)
     polys = [np.ascontiguousarray(p, dtype=np.float64) for p in vertices]
@@ -258,6 +279,10 @@ def polygon_set(
             raise ValueError(f"polygon {k}: PINNED needs inertia (about the pivot) > 0")
         if kinds[k] not in (FREE, PINNED, KINEMATIC):
             raise ValueError(f"polygon {k}: unknown kind {kinds[k]}")
+    solid, corner = features if features is not None else whole_features(polys)
+    n_vertices = int(start[-1])
+    if solid.shape != (n_vertices,) or corner.shape != (n_vertices, 2):
+        raise ValueError(f"features must have shapes ({n_vertices},) and ({n_vertices}, 2)")
     return PolygonSet(
         vertices=np.ascontiguousarray(np.concatenate(polys, axis=0)),
         start=start,
@@ -269,7 +294,59 @@ def polygon_set(
         inertia=inertias,
         pivot=per_poly(pivot, 0.0, width=2),
         mat=per_poly(mat, 0, np.int32),
+        solid=np.ascontiguousarray(solid, dtype=np.int8),
+        corner=np.ascontiguousarray(corner, dtype=np.int64),
     )
+
+
+def whole_features(polygons: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(solid, corner) of polygons that are each a whole convex body (``PolygonSet`` doc)."""
+    solid, corner, offset = [], [], 0
+    for p in polygons:
+        m = len(p)
+        local = np.arange(m)
+        solid.append(np.ones(m, dtype=np.int8))
+        corner.append(offset + np.stack([(local - 1) % m, (local + 1) % m], axis=1))
+        offset += m
+    return np.concatenate(solid), np.concatenate(corner).astype(np.int64)
+
+
+def piece_features(
+    pieces: list[np.ndarray], loops: list[np.ndarray], rel_tol: float = 1e-9
+) -> tuple[np.ndarray, np.ndarray]:
+    """(solid, corner) of the convex ``pieces`` of one body whose outline is ``loops`` (each
+    (n, 2), walked with the body on its left: the outer loop counter-clockwise, holes
+    clockwise), vertex indices counted over the pieces concatenated (``PolygonSet`` doc).
+
+    An edge is solid when its midpoint lies on a loop; a loop vertex where the body is convex
+    (turning left) is owned by the first piece that has it. Lengths in any unit; ``rel_tol``
+    is relative to the body's size.
+    """
+    flat = np.concatenate(pieces)
+    tol = rel_tol * float(np.ptp(np.concatenate(loops), axis=0).max())
+    segments = np.concatenate([np.stack([q, np.roll(q, -1, axis=0)], axis=1) for q in loops])
+
+    def index_of(point: np.ndarray) -> int:
+        return int(np.argmin(np.hypot(*(flat - point).T)))
+
+    def on_loop(point: np.ndarray) -> bool:
+        a, b = segments[:, 0], segments[:, 1]
+        e = b - a
+        t = np.clip(np.einsum("ij,ij->i", point - a, e) / np.einsum("ij,ij->i", e, e), 0, 1)
+        return bool(np.min(np.hypot(*(a + t[:, None] * e - point).T)) <= tol)
+
+    edges = [zip(p, np.roll(p, -1, axis=0), strict=True) for p in pieces]
+    solid = np.array([on_loop(0.5 * (v + w)) for e in edges for v, w in e], dtype=np.int8)
+    corner = np.full((len(flat), 2), -1, dtype=np.int64)
+    for loop in loops:
+        turns = zip(np.roll(loop, 1, axis=0), loop, np.roll(loop, -1, axis=0), strict=True)
+        for before, vertex, after in turns:
+            (ax, ay), (bx, by) = vertex - before, after - vertex
+            turn = ax * by - ay * bx
+            owner = index_of(vertex)
+            if turn > 0 and np.hypot(*(flat[owner] - vertex)) <= tol:
+                corner[owner] = (index_of(before), index_of(after))
+    return solid, corner
 
 
 @dataclass(frozen=True)
@@ -347,6 +424,8 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
         inertia=np.zeros(0),
         pivot=empty.copy(),
         mat=np.zeros(0, np.int32),
+        solid=np.zeros(0, np.int8),
+        corner=np.zeros((0, 2), np.int64),
     )
     table = ContactTable(
         law=np.zeros((0, 0), np.int32),
@@ -360,14 +439,20 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
 
 
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def closest_feature(px, py, verts, lo, hi):
-    """Signed distance d of (px, py) to the polygon verts[lo:hi] (< 0 inside) and the normal n.
+def closest_feature(px, py, poly, k):
+    """Signed distance d of (px, py) to polygon k of ``poly`` (``PolygonSet.arrays()``; < 0
+    inside) and the normal n, over the polygon's solid features only (``PolygonSet`` doc).
 
-    Outside: d = distance to the closest boundary point, n from that point to the centre.
-    Inside: d = largest edge signed distance (≤ 0), n = that edge's outward normal.
+    Outside: d = distance to the closest point of a solid edge, n from that point to the centre;
+    a closest point at a corner counts only if the polygon owns the corner and the centre lies
+    in the corner's region of the whole outline, else there is no contact (d = inf, n = 0).
+    Inside: d = largest signed distance to a solid edge (≤ 0), n = that edge's outward normal.
     Returns (d, n_x, n_y), m and unit vector.
     """
-    m = hi - lo
+    verts, start, solid, corner = poly[0], poly[1], poly[10], poly[11]
+    lo = start[k]
+    m = start[k + 1] - lo
+    s_all = -np.inf
     s_max = -np.inf
     nx_max = 0.0
     ny_max = 0.0
@@ -380,17 +465,23 @@ def closest_feature(px, py, verts, lo, hi):
         nx = ey * inv
         ny = -ex * inv
         s = (px - ax) * nx + (py - ay) * ny
-        if s > s_max:
+        s_all = max(s_all, s)
+        if solid[lo + j] != 0 and s > s_max:
             s_max = s
             nx_max = nx
             ny_max = ny
-    if s_max <= 0.0:
+    if s_all <= 0.0:
+        if s_max == -np.inf:  # a piece with no solid edge
+            return np.inf, 0.0, 0.0
         return s_max, nx_max, ny_max
-    # Outside: closest point over all edges (segments).
+    # Outside: closest point over the solid edges (segments).
     d2_min = np.inf
     qx_min = 0.0
     qy_min = 0.0
+    vertex = -1
     for j in range(m):
+        if solid[lo + j] == 0:
+            continue
         ax, ay = verts[lo + j, 0], verts[lo + j, 1]
         jb = lo + j + 1 if j + 1 < m else lo
         ex = verts[jb, 0] - ax
@@ -404,6 +495,19 @@ def closest_feature(px, py, verts, lo, hi):
             d2_min = d2
             qx_min = qx
             qy_min = qy
+            vertex = lo + j if t == 0.0 else (jb if t == 1.0 else -1)
+    if d2_min == np.inf:
+        return np.inf, 0.0, 0.0
+    if vertex >= 0:
+        before, after = corner[vertex, 0], corner[vertex, 1]
+        if before < 0:
+            return np.inf, 0.0, 0.0
+        vx = verts[vertex, 0]
+        vy = verts[vertex, 1]
+        into = (px - vx) * (vx - verts[before, 0]) + (py - vy) * (vy - verts[before, 1])
+        out = (px - vx) * (verts[after, 0] - vx) + (py - vy) * (verts[after, 1] - vy)
+        if into < 0.0 or out > 0.0:
+            return np.inf, 0.0, 0.0
     d = math.sqrt(d2_min)
     return d, (px - qx_min) / d, (py - qy_min) / d
 
@@ -426,7 +530,7 @@ def pose(verts0, com0, pivot0, poly, t):
     """Pose the polygons ``poly`` (``PolygonSet.arrays()``) t seconds after the pose (verts0,
     com0, pivot0) by rigid motion at their velocities: c(t) = c0 + v_c t, vertices and pivot
     turned by ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
-    verts, start, com, vel, omega, _, _, _, pivot, _ = poly
+    verts, start, com, vel, omega, _, _, _, pivot = poly[:9]
     for k in range(com.shape[0]):
         c = math.cos(omega[k] * t)
         s = math.sin(omega[k] * t)
@@ -470,7 +574,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     granule, N (−it on the polygon); torque on the granule, N·m; torque on the polygon about its
     centre of mass, N·m; energy dissipated over the step, J.
     """
-    verts, start, com, pvel, pomega, kind, pmass, pinertia, pivot, pmat = poly
+    com, pvel, pomega, kind, pmass, pinertia, pivot, pmat = poly[2:10]
     law, k_n, k_t, damping, friction, clamp = table
     xi = x[i, 0]
     yi = x[i, 1]
@@ -489,7 +593,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
         ) + 0.5 * abs(hist[i, k, HIST_RATE])
         if dist - reach >= 0.5 * dt * bound:
             return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, ri, mat, pmat, law, k_t, hist)
-    d, nx, ny = closest_feature(xi, yi, verts, start[k], start[k + 1])
+    d, nx, ny = closest_feature(xi, yi, poly, k)
     delta = ri - d
     # Contact point: middle of the overlap (the surface point before first touch); t = (-ny, nx).
     arm = ri - 0.5 * max(delta, 0.0)
@@ -600,7 +704,7 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
     dy = py - poly[2][k, 1]
     if dx * dx + dy * dy >= (rho[k] + limit) ** 2:  # outside the bounding circle: cheap reject
         return False
-    d, _, _ = closest_feature(px, py, poly[0], poly[1][k], poly[1][k + 1])
+    d, _, _ = closest_feature(px, py, poly, k)
     return d < limit
 
 
@@ -688,7 +792,7 @@ def _contact_energy(x, r, mat, poly, table, hist, normal, tangential):
             dist = math.sqrt((x[i, 0] - com[k, 0]) ** 2 + (x[i, 1] - com[k, 1]) ** 2)
             if dist >= rho[k] + r[i] and xi == 0.0:
                 continue
-            d, _, _ = closest_feature(x[i, 0], x[i, 1], verts, start[k], start[k + 1])
+            d, _, _ = closest_feature(x[i, 0], x[i, 1], poly, k)
             delta = max(r[i] - d, 0.0)
             a = mat[i]
             b = pmat[k]
