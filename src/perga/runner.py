@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from perga.case.parts import chamber_geometry
 from perga.case.schema import Case
 from perga.case.timestep import step_plan
 from perga.engine.from_case import scene_spec
@@ -68,7 +69,9 @@ def prepare_directory(directory: Path, overwrite: bool) -> None:
 
 
 def check_granules(sim: Simulation, chamber_radius: float, wall_thickness: float) -> None:
-    """Raise RunStoppedError for a non-finite state or a granule outside the chamber wall."""
+    """Raise RunStoppedError for a non-finite state or a granule outside the chamber wall
+    (farther from the axis than the wall's farthest inner point, ``chamber_radius``, plus its
+    thickness)."""
     p, v = sim.granule_positions(), sim.granule_velocities()
     bad = np.nonzero(~np.all(np.isfinite(np.hstack((p, v))), axis=1))[0]
     if bad.size:
@@ -144,11 +147,13 @@ def run_case(
         recorders = [RECORDERS[name](directory) for name in record]
         frames = PhaseLock(case.output.every)
         n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-        chamber = case.chamber
+        wall = chamber_geometry(case)
+        assert wall is not None and case.chamber is not None
+        thickness = case.chamber.wall_thickness
         report_every = max(1, n_steps // 200)
 
         def write_frame() -> None:
-            check_granules(sim, chamber.radius, chamber.wall_thickness)
+            check_granules(sim, wall.outer_radius, thickness)
             for recorder in recorders:
                 recorder.record(sim)
             summary.frames += 1

@@ -15,9 +15,11 @@ import numpy as np
 
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
 from perga.case.hammer_geometry import hammer_geometry
+from perga.case.parts import chamber_geometry, hinge_misses, hinge_positions, rotor_geometry
 from perga.case.placement import initial_state
 from perga.case.schema import Case, ExplicitPlacement, RandomPlacement
 from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
+from perga.geometry.wall import wall_pieces
 
 MIN_STEPS_PER_CONTACT = 10
 """Fewest steps per soft contact accepted (symplectic Euler is stable to about t_c/5; e drifts
@@ -82,13 +84,42 @@ def _hammers(case: Case) -> list[str]:
         geometry = hammer_geometry(case)
     except ValueError as exc:
         return [*problems, f"hammers.shape: {exc}"]
-    if case.chamber:
+    chamber = chamber_geometry(case)
+    if chamber is not None:
         reach = geometry.reach(h.hinge_radius)
-        if reach >= case.chamber.radius:
+        if reach >= chamber.inner_radius:
             problems.append(
-                f"hammers: a hammer reaches {reach:.4g} m from the axis, past the chamber wall at "
-                f"chamber.radius = {case.chamber.radius:g} m"
+                f"hammers: a hammer reaches {reach:.4g} m from the axis, past the chamber wall's "
+                f"nearest point at {chamber.inner_radius:.4g} m"
             )
+    hinges = hinge_positions(case)
+    for k in hinge_misses(case, hinges):
+        rotor = rotor_geometry(case)
+        assert rotor is not None
+        holes = ", ".join(f"({x:.4g}, {y:.4g})" for x, y in rotor.hinges)
+        problems.append(
+            f"hammers: hinge {k} at ({hinges[k][0]:.4g}, {hinges[k][1]:.4g}) m is at no hinge "
+            f"hole of the rotor ({rotor.source}: holes at {holes} m); set hammers.hinge_radius, "
+            "count and angles to match"
+        )
+    return problems
+
+
+def _parts(case: Case) -> list[str]:
+    """The rotor disc and chamber files load (their errors name the file)."""
+    problems = []
+    for name, load in (("rotor.shape", rotor_geometry), ("chamber.shape", chamber_geometry)):
+        try:
+            load(case)
+        except ValueError as exc:
+            problems.append(f"{name}: {exc}")
+    wall = None if problems else chamber_geometry(case)
+    if wall is not None and wall.outline is not None:
+        assert case.chamber is not None
+        try:
+            wall_pieces(wall.outline, case.chamber.wall_thickness, wall.source)
+        except ValueError as exc:
+            problems.append(f"chamber.wall_thickness: {exc}")
     return problems
 
 
@@ -97,7 +128,9 @@ def _granules(case: Case) -> list[str]:
     if placement is None or case.chamber is None:
         return []
     problems = []
-    limit = case.chamber.radius - g.radius
+    wall = chamber_geometry(case)
+    assert wall is not None
+    limit = wall.inner_radius - g.radius
     if isinstance(placement, ExplicitPlacement):
         if len(placement.positions) != g.count:
             problems.append(
@@ -114,8 +147,9 @@ def _granules(case: Case) -> list[str]:
     if isinstance(placement, RandomPlacement):
         if not placement.inner_radius + g.radius <= placement.outer_radius <= limit:
             problems.append(
-                f"granules.placement.outer_radius: must be in [inner_radius + radius, "
-                f"chamber.radius − radius] = [{placement.inner_radius + g.radius:g}, {limit:g}] m "
+                "granules.placement.outer_radius: must be in [inner_radius + radius, "
+                "wall's inner radius − radius] = "
+                f"[{placement.inner_radius + g.radius:g}, {limit:g}] m "
                 f"(got {placement.outer_radius:g})"
             )
         else:
@@ -132,7 +166,7 @@ def _granules(case: Case) -> list[str]:
     for i in np.nonzero(distance > limit)[0]:
         problems.append(
             f"granules.placement: granule {i} at {distance[i]:.4g} m from the axis overlaps the "
-            f"wall (centres must be within chamber.radius − radius = {limit:.4g} m)"
+            f"wall (centres must be within the wall's inner radius − radius = {limit:.4g} m)"
         )
     if len(positions) > 1:
         gaps = np.hypot(*(positions[:, None, :] - positions[None, :, :]).transpose(2, 0, 1))
@@ -238,6 +272,9 @@ def check_case(case: Case) -> list[str]:
     problems = _names(case)
     if problems:
         return problems
+    problems = _parts(case)
+    if problems:
+        return problems  # the later checks need the rotor's and chamber's geometry
     problems = _hammers(case)
     if any(p.startswith("hammers.shape:") for p in problems):
         return problems  # the later checks need the hammer's geometry

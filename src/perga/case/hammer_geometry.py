@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from perga.case.schema import Case, FileShape, PlateShape
+from perga.case.schema import Case, FileShape, PartFile, PlateShape
 from perga.geometry.mass import load_mesh, mesh_mass_properties
 from perga.geometry.outline import read_outline
 from perga.geometry.polygon import counter_clockwise
@@ -46,7 +46,7 @@ class HammerGeometry:
         return max(math.hypot(hinge_radius + x, y) for x, y in self.outline)
 
 
-def resolve_path(case_dir: Path | None, shape: FileShape) -> Path:
+def resolve_path(case_dir: Path | None, shape: FileShape | PartFile) -> Path:
     """The geometry file of ``shape``: absolute, or relative to the case file's folder."""
     path = Path(shape.path)
     return path if path.is_absolute() or case_dir is None else case_dir / path

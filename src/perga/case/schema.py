@@ -21,6 +21,15 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+class PartFile(Strict):
+    """A rotor disc or chamber drawn in a geometry file (geometry/), in the rotor frame (the
+    rotor axis at the origin). Relative paths are relative to the case file."""
+
+    kind: Literal["file"]
+    path: str = Field(description="geometry file, relative to the case file or absolute")
+    units: Literal["m", "cm", "mm"] = Field("mm", description="length unit of the file")
+
+
 class Rotor(Strict):
     """[rotor]: the rotor turning at constant angular velocity."""
 
@@ -35,7 +44,14 @@ class Rotor(Strict):
     rpm: float | None = Field(
         None, gt=0, le=20000, description="angular velocity, rev/min, in (0, 20000]; or omega"
     )
-    radius: float = Field(0.15, gt=0, le=5, description="rotor disc radius, m, in (0, 5]")
+    radius: float = Field(
+        0.15, gt=0, le=5, description="rotor disc radius, m, in (0, 5]; omit with a shape"
+    )
+    shape: PartFile | None = Field(
+        None,
+        description="the rotor disc from a mesh (its section by the rotor plane) or an outline "
+        "with its hinge holes: sets the disc radius, and every hammer's hinge must sit at a hole",
+    )
     inertia: float | None = Field(
         None,
         gt=0,
@@ -50,6 +66,8 @@ class Rotor(Strict):
     def _one_speed(self) -> Rotor:
         if (self.omega is None) == (self.rpm is None):
             raise ValueError("give exactly one of omega (rad/s) or rpm (rev/min)")
+        if self.shape is not None and "radius" in self.model_fields_set:
+            raise ValueError("radius: the disc's shape file sets it; omit radius")
         return self
 
     @property
@@ -281,13 +299,25 @@ class PaperStudy(Strict):
 
 
 class Chamber(Strict):
-    """[chamber]: the round wall around the rotor."""
+    """[chamber]: the wall around the rotor: round (``radius``) or drawn in a file (``shape``,
+    its inner outline; a closed mesh gives its section's outline)."""
 
-    radius: float = Field(gt=0, le=5, description="inner radius of the wall, m, in (0, 5]")
+    radius: float | None = Field(
+        None, gt=0, le=5, description="inner radius of a round wall, m, in (0, 5]; or a shape"
+    )
+    shape: PartFile | None = Field(
+        None, description="the wall's inner outline from a geometry file; or a radius"
+    )
     wall_thickness: float = Field(
         0.01, gt=0, le=1, description="wall thickness, m, in (0, 1]; thick walls stop tunnelling"
     )
     material: str = Field("steel", description="name of a [materials] entry")
+
+    @model_validator(mode="after")
+    def _one_outline(self) -> Chamber:
+        if (self.radius is None) == (self.shape is None):
+            raise ValueError("give exactly one of radius (a round wall, m) or shape (a file)")
+        return self
 
 
 class FloorFriction(Strict):

@@ -10,9 +10,8 @@ stiffness and steps from :mod:`perga.case.timestep`.
 
 from __future__ import annotations
 
-import math
-
 from perga.case.hammer_geometry import hammer_geometry
+from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
 from perga.case.placement import initial_state
 from perga.case.schema import Case
 from perga.case.timestep import normal_stiffness, step_plan
@@ -29,11 +28,11 @@ from perga.engine.spec import (
     SceneSpec,
     SoftContactSpec,
 )
+from perga.geometry.polygon import vertex_tuples
 
 
 def _hammers(case: Case) -> tuple[HammerSpec, ...]:
     h, g = case.hammers, hammer_geometry(case)
-    angles = h.angles or tuple(2 * math.pi * i / h.count for i in range(h.count))
     return tuple(
         HammerSpec(
             outline=g.outline,
@@ -48,7 +47,7 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
             swing_limit=h.swing_limit,
             velocity=h.velocity,
         )
-        for angle in angles
+        for angle in hammer_angles(case)
     )
 
 
@@ -102,6 +101,20 @@ def _soft(case: Case) -> SoftContactSpec | None:
     )
 
 
+def _rotor(case: Case) -> RotorSpec:
+    disc = rotor_geometry(case)
+    if disc is None:
+        return RotorSpec(case.rotor.angular_velocity, case.rotor.radius)
+    return RotorSpec(case.rotor.angular_velocity, disc.radius, vertex_tuples(disc.outline))
+
+
+def _chamber(case: Case) -> ChamberSpec:
+    c, g = case.chamber, chamber_geometry(case)
+    assert c is not None and g is not None
+    outline = None if g.outline is None else vertex_tuples(g.outline)
+    return ChamberSpec(g.inner_radius, c.wall_thickness, c.material, outline=outline)
+
+
 def scene_spec(case: Case) -> SceneSpec:
     """The engine's description of a validated case (raises ValueError without a placement or
     a chamber: a simulation needs both)."""
@@ -120,7 +133,7 @@ def scene_spec(case: Case) -> SceneSpec:
     )
     gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
     return SceneSpec(
-        rotor=RotorSpec(case.rotor.angular_velocity, case.rotor.radius),
+        rotor=_rotor(case),
         hammers=hammers,
         granules=granules,
         contacts=contacts,
@@ -128,9 +141,7 @@ def scene_spec(case: Case) -> SceneSpec:
         iterations=case.solver.iterations,
         gravity=gravity,
         granule_collisions=case.effects.granule_collisions is not None,
-        chamber=ChamberSpec(
-            case.chamber.radius, case.chamber.wall_thickness, case.chamber.material
-        ),
+        chamber=_chamber(case),
         effects=_effects(case),
         soft=_soft(case),
     )

@@ -24,10 +24,11 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
   With soft contacts (``spec.soft``) there are none: granules and the chamber wall are arrays
   of :mod:`perga.soft`, stepped by :class:`~perga.engine.soft_simulation.SoftSimulation`;
   Pymunk then holds only the rotor and the hammers.
-* Chamber (optional, rigid contacts only): ``segments`` convex quadrilaterals on the space's
-  static body, each ``wall_thickness`` thick, whose inner faces are tangent to the circle of
-  the inner radius (the inner outline is the circumscribed polygon: at most R(1/cos(π/N) − 1)
-  outside the circle, 8e-5 m for R = 0.15 m, N = 96). They share the hammers' filter group.
+* Chamber (optional, rigid contacts only): one convex quadrilateral per edge of the wall's inner
+  outline on the space's static body, ``wall_thickness`` thick (:mod:`perga.geometry.wall`).
+  A round wall's inner outline is the polygon of ``segments`` sides circumscribing the circle
+  (at most R(1/cos(π/N) − 1) outside it, 8e-5 m for R = 0.15 m, N = 96); a chamber from a file
+  has its own outline. They share the hammers' filter group.
 * Effects: :mod:`perga.engine.effects` builds exactly the effects the spec lists, after
   everything else (the drive turns the rotor into a dynamic body).
 * Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Each material gets
@@ -51,11 +52,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+import numpy as np
 import pymunk
 
 from perga.engine import units as u
 from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.engine.spec import ChamberSpec, GranuleSpec, HammerSpec, SceneSpec, Vec2
+from perga.geometry.wall import circumscribed, wall_pieces
 
 Kind = Literal["granule", "hammer", "wall"]
 Phase = Literal["begin", "pre_solve", "post_solve", "separate"]
@@ -355,18 +358,23 @@ def _build_granule(g: GranuleSpec) -> tuple[pymunk.Body, pymunk.Circle]:
     return body, pymunk.Circle(body, u.to_internal(g.radius, u.LENGTH))
 
 
+def chamber_inner_outline(chamber: ChamberSpec) -> np.ndarray:
+    """The wall's inner outline, m: the chamber's outline, or the circumscribed polygon of a
+    round wall's circle."""
+    if chamber.outline is not None:
+        return np.array(chamber.outline, dtype=float)
+    return circumscribed(chamber.radius, chamber.segments)
+
+
+def chamber_pieces(chamber: ChamberSpec) -> list[np.ndarray]:
+    """The wall's convex pieces, m (:func:`perga.geometry.wall.wall_pieces`)."""
+    pieces, _ = wall_pieces(chamber_inner_outline(chamber), chamber.wall_thickness)
+    return pieces
+
+
 def _build_chamber(chamber: ChamberSpec, static: pymunk.Body) -> list[pymunk.Poly]:
-    """Quadrilaterals whose inner edges are tangent to the circle of radius ``chamber.radius``."""
-    n = chamber.segments
-    stretch = 1.0 / math.cos(math.pi / n)
-    inner = u.to_internal(chamber.radius, u.LENGTH) * stretch
-    outer = u.to_internal(chamber.radius + chamber.wall_thickness, u.LENGTH) * stretch
-    shapes = []
-    for i in range(n):
-        a0, a1 = 2 * math.pi * i / n, 2 * math.pi * (i + 1) / n
-        corners = [
-            (radius * math.cos(a), radius * math.sin(a))
-            for radius, a in ((inner, a0), (outer, a0), (outer, a1), (inner, a1))
-        ]
-        shapes.append(pymunk.Poly(static, corners))
-    return shapes
+    """One quadrilateral per edge of the wall's inner outline, ``wall_thickness`` thick."""
+    return [
+        pymunk.Poly(static, [u.vec_to_internal(tuple(v), u.LENGTH) for v in piece])
+        for piece in chamber_pieces(chamber)
+    ]

@@ -66,16 +66,16 @@ def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
 
 
 def polygon_table(
-    spec: SceneSpec, materials: list[str], hammer_materials: list[str]
+    spec: SceneSpec, materials: list[str], polygon_materials: list[str]
 ) -> ContactTable:
-    """The granule-polygon table: rows ``materials`` (granules' used), columns the hammers'."""
+    """The granule-polygon table: rows ``materials`` (granules' used), columns the polygons'."""
     soft = spec.soft
     assert soft is not None
-    shape = (len(materials), len(hammer_materials))
+    shape = (len(materials), len(polygon_materials))
     e, f = np.ones(shape), np.zeros(shape)
     granule_materials = {g.material for g in spec.granules}
     for i, a in enumerate(materials):
-        for j, b in enumerate(hammer_materials):
+        for j, b in enumerate(polygon_materials):
             if a in granule_materials:
                 c = spec.contact(a, b)
                 e[i, j], f[i, j] = c.restitution, c.friction
@@ -91,14 +91,15 @@ step opens several parallel regions, each costing tens of µs on a busy machine:
 
 
 def soft_granules(
-    spec: SceneSpec, polygons: PolygonSet, hammer_materials: list[str]
+    spec: SceneSpec, polygons: PolygonSet, polygon_materials: list[str]
 ) -> SoftGranules:
-    """The scene's granules as :class:`~perga.soft.SoftGranules` at step ``spec.dt``, with the
-    chamber wall and the hammer ``polygons`` (a posed :class:`~perga.soft.polygons.PolygonSet`
-    whose ``mat`` indexes ``hammer_materials``); one thread below ``THREADED_FROM`` granules."""
+    """The scene's granules as :class:`~perga.soft.SoftGranules` at step ``spec.dt``, with a
+    round chamber wall (the kernel's circle) and the ``polygons`` (hammers and a drawn wall: a
+    posed :class:`~perga.soft.polygons.PolygonSet` whose ``mat`` indexes
+    ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
     materials = sorted({g.material for g in spec.granules})
     walls = []
-    if spec.chamber is not None:
+    if spec.chamber is not None and spec.chamber.outline is None:
         if spec.chamber.material not in materials:
             materials.append(spec.chamber.material)
         walls.append(chamber(spec.chamber.radius, mat=materials.index(spec.chamber.material)))
@@ -115,7 +116,7 @@ def soft_granules(
         gravity=spec.gravity,
         dt=spec.dt,
         polygons=polygons,
-        polygon_table=polygon_table(spec, materials, hammer_materials),
+        polygon_table=polygon_table(spec, materials, polygon_materials),
         threads=None if len(g) >= THREADED_FROM else 1,
         pairs=spec.granule_collisions,
     )

@@ -5,7 +5,7 @@ Step order of :meth:`SoftSimulation.step` (one Pymunk step of ``machine_dt`` = k
 1. The kicks the spec lists (floor friction, air drag: :mod:`perga.engine.effects`) change the
    granules' velocities over the Pymunk step, as in the rigid engine.
 2. Each hammer is posed one granule step ahead along its current motion
-   (:mod:`perga.engine.hammer_polygons` explains why).
+   (:mod:`perga.engine.machine_polygons` explains why).
 3. The kernel takes k granule steps in one compiled call (:mod:`perga.soft`): pair, wall and
    hammer contacts, kick-drift; hammers move rigidly with their current velocities during the
    call and the mean load on each is returned.
@@ -27,7 +27,7 @@ import numpy as np
 from perga.engine import units as u
 from perga.engine.effects import Kick, run_kicks
 from perga.engine.energy import EnergyLedger, LedgerTerms
-from perga.engine.hammer_polygons import HammerPolygons
+from perga.engine.machine_polygons import MachinePolygons
 from perga.engine.scene import Scene, build_scene
 from perga.engine.simulation import FloatArray, Impact, Simulation, hammer_energy
 from perga.engine.soft_build import soft_granules
@@ -50,12 +50,12 @@ class SoftSimulation(Simulation):
         self._dt_internal = u.to_internal(self.dt, u.TIME)
         self.granule_dt = spec.dt
         self.substeps = spec.soft.substeps
-        self.hammers = HammerPolygons(scene)
-        self.granules = soft_granules(spec, self.hammers.polygons, self.hammers.materials)
+        self.machine = MachinePolygons(scene)
+        self.granules = soft_granules(spec, self.machine.polygons, self.machine.materials)
         self._kicks = [e for e in scene.effects if isinstance(e, Kick)]
         self._kick_positions = any(k.needs_positions for k in self._kicks)
         self.log = (
-            SoftImpactLog(self.granules, self.hammers.hammer_of, lambda k: hammer_energy(scene, k))
+            SoftImpactLog(self.granules, self.machine.hammer_of, lambda k: hammer_energy(scene, k))
             if record_impacts
             else None
         )
@@ -81,11 +81,11 @@ class SoftSimulation(Simulation):
             positions = g.x / u.LENGTH if self._kick_positions else None
             v = run_kicks(self._kicks, g.v / u.VELOCITY, positions, self._dt_internal)
             g.v[:] = v * u.VELOCITY
-        self.hammers.pose(self.granule_dt)
+        self.machine.pose(self.granule_dt)
         if self.log is not None:
             self.log.before()
         g.step(self.substeps)
-        moment = self.hammers.apply_loads()
+        moment = self.machine.apply_loads()
         if self.meter is None:
             self.scene.space.step(self._dt_internal)
         else:

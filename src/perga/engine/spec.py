@@ -19,7 +19,7 @@ from typing import Literal
 
 from perga.analytic.common import STANDARD_GRAVITY
 from perga.geometry.convex import decompose
-from perga.geometry.polygon import clean, counter_clockwise, self_intersection
+from perga.geometry.polygon import clean, counter_clockwise, self_intersection, vertex_tuples
 
 Vec2 = tuple[float, float]
 Mount = Literal["hinged", "welded", "free"]
@@ -35,10 +35,6 @@ def _positive(problems: list[str], name: str, value: float, unit: str = "") -> N
         problems.append(f"{name} must be finite and > 0{' ' + unit if unit else ''} (got {value})")
 
 
-def _points(array) -> tuple[Vec2, ...]:
-    return tuple((float(x), float(y)) for x, y in array)
-
-
 def _finite_vec(problems: list[str], name: str, value: Vec2) -> None:
     if len(value) != 2 or not all(math.isfinite(c) for c in value):
         problems.append(f"{name} must be two finite numbers (got {value!r})")
@@ -49,11 +45,14 @@ class RotorSpec:
     """A rotor turning at constant angular velocity about the origin.
 
     omega: angular velocity, rad/s (>= 0; 0 gives a fixed machine, e.g. a wall test);
-    radius: rotor disc radius, m (> 0; geometric, used for output and checks).
+    radius: rotor disc radius, m (> 0; geometric, used for output and checks);
+    outline: the disc's outline (m, counter-clockwise) when it is not a circle of ``radius``
+    (output only: the disc is out of the granules' plane).
     """
 
     omega: float
     radius: float
+    outline: tuple[Vec2, ...] | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []
@@ -109,8 +108,9 @@ class HammerSpec:
                 problems.append(f"outline edges {crossing[0]} and {crossing[1]} cross")
             else:
                 outline = clean(counter_clockwise(self.outline))
-                object.__setattr__(self, "outline", _points(outline))
-                object.__setattr__(self, "pieces", tuple(_points(q) for q in decompose(outline)))
+                object.__setattr__(self, "outline", vertex_tuples(outline))
+                pieces = tuple(vertex_tuples(q) for q in decompose(outline))
+                object.__setattr__(self, "pieces", pieces)
         _positive(problems, "mass", self.mass, "kg")
         _finite_vec(problems, "centre_of_mass", self.centre_of_mass)
         if not problems:
@@ -227,17 +227,20 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class ChamberSpec:
-    """A round chamber wall centred on the rotor axis, static.
+    """A static chamber wall around the rotor axis: round, or along an outline.
 
-    radius: inner radius, m; wall_thickness: m (thick walls stop fast granules tunnelling,
-    design §5); material: name in the contact table; segments: number of thick segments whose
-    inner faces touch the circle (>= 8). Hammers never collide with the wall.
+    radius: inner radius of a round wall, or the nearest point of ``outline`` to the axis, m;
+    wall_thickness: m (thick walls stop fast granules tunnelling, design §5); material: name
+    in the contact table; segments: number of thick segments whose inner faces touch the
+    circle of a round wall (>= 8); outline: the wall's inner outline (m, counter-clockwise,
+    around the axis), None for a round wall. Hammers never collide with the wall.
     """
 
     radius: float
     wall_thickness: float
     material: str
     segments: int = 96
+    outline: tuple[Vec2, ...] | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []

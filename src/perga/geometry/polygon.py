@@ -18,6 +18,22 @@ def as_points(points: ArrayLike) -> FloatArray:
     return array
 
 
+def outline_or_circle(
+    outline: ArrayLike | None, radius: float, sides: int, angle: float = 0.0
+) -> FloatArray:
+    """``outline`` as an (n, 2) array, or without one the regular ``sides``-gon inscribed in
+    the circle of ``radius`` about the origin, counter-clockwise from ``angle`` (rad)."""
+    if outline is not None:
+        return as_points(outline)
+    phi = angle + 2.0 * np.pi * np.arange(sides) / sides
+    return radius * np.column_stack((np.cos(phi), np.sin(phi)))
+
+
+def vertex_tuples(points: ArrayLike) -> tuple[tuple[float, float], ...]:
+    """The vertices as a tuple of (x, y) float pairs (hashable, for frozen specs)."""
+    return tuple((float(x), float(y)) for x, y in as_points(points))
+
+
 def signed_area(points: ArrayLike) -> float:
     """Shoelace area, m² (> 0 counter-clockwise)."""
     p = as_points(points)

@@ -24,6 +24,7 @@ from matplotlib.patches import Circle, Polygon
 from perga.case import load_case
 from perga.engine.from_case import scene_spec
 from perga.engine.spec import HammerSpec
+from perga.geometry.polygon import outline_or_circle
 
 
 def _table(path: Path) -> np.ndarray:
@@ -69,9 +70,13 @@ def render(
     t = times[-1] if time is None else times[np.argmin(np.abs(times - time))]
     fig = Figure(figsize=(7, 7), dpi=120)  # no pyplot: no GUI backend, no global state
     ax = fig.subplots()
-    chamber = spec.chamber.radius if spec.chamber else 1.2 * spec.rotor.radius
-    ax.add_patch(Circle((0, 0), chamber, fill=False, color="0.3", lw=1.5))
-    ax.add_patch(Circle((0, 0), spec.rotor.radius, fill=False, color="0.75", lw=1, ls="--"))
+    r, c = spec.rotor, spec.chamber
+    wall = outline_or_circle(c.outline, c.radius, 256) if c else None
+    chamber = float(np.abs(wall).max()) if wall is not None else 1.2 * r.radius
+    if wall is not None:
+        ax.add_patch(Polygon(wall, closed=True, fill=False, color="0.3", lw=1.5))
+    disc = outline_or_circle(r.outline, r.radius, 256)
+    ax.add_patch(Polygon(disc, closed=True, fill=False, color="0.75", lw=1, ls="--"))
     frame = hammers[hammers["time"] == t]
     rotor_angle = float(frame["swing_angle"][frame["id"] == -1][0])
     polys = []

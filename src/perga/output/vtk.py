@@ -11,13 +11,14 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   ``contacts`` (granule, wall and hammer contacts now: overlap > 0, hammers by the kernel's
   active flag) and ``overlap_max`` (largest of those overlaps, m; 0 without contact).
 * ``machine.pvd`` + ``machine_NNNNNN.vtu``, one per frame: each hammer as a VTK_POLYGON posed at
-  the frame, then the rotor as a 64-gon of the rotor radius; cell data ``id`` (hammer index,
+  the frame, then the rotor disc (its outline from the rotor's file, or a 64-gon of the rotor
+  radius); cell data ``id`` (hammer index,
   −1 for the rotor), ``swing_angle`` (α, rad; 0 for the rotor), ``angle`` (absolute orientation:
   rotor angle + angle on the rotor + α, rad), ``angular_velocity`` (rad/s), ``hinge_force``
   (magnitude of the hinge reaction over the last Pymunk step, N; 0 for welded and free hammers
   and the rotor).
-* ``chamber.vtu``: the chamber's inner circle as one closed VTK_POLY_LINE (256 segments),
-  written at the first frame (absent without a chamber).
+* ``chamber.vtu``: the wall's inner outline (from the chamber's file, or its circle as 256
+  segments) as one closed VTK_POLY_LINE, written at the first frame (absent without a chamber).
 * ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule through its recorded frame
   positions; point data ``time`` (s) and ``speed`` (m/s), cell data ``id``.
 * ``impacts.vtu`` (at ``close``): a VTK_VERTEX per granule-hammer impact at its contact point;
@@ -32,7 +33,6 @@ so a run stopped at any point leaves valid collections of the frames written so 
 from __future__ import annotations
 
 import itertools
-import math
 import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from perga.engine import units as u
 from perga.engine.simulation import FloatArray, Simulation
 from perga.engine.soft_simulation import SoftSimulation
+from perga.geometry.polygon import outline_or_circle
 from perga.soft import polygons as pg
 
 ROTOR_SIDES = 64
@@ -112,12 +113,6 @@ def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
     )
 
 
-def _circle(radius: float, sides: int, angle: float = 0.0) -> FloatArray:
-    """Vertices of a regular ``sides``-gon of circumradius ``radius`` (m) about the origin,
-    counter-clockwise from ``angle`` (rad)."""
-    phi = angle + 2.0 * math.pi * np.arange(sides) / sides
-    return radius * np.column_stack((np.cos(phi), np.sin(phi)))
-
 
 def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
     """Per granule: the number of contacts now (granule pairs and walls with overlap > 0,
@@ -174,10 +169,10 @@ class VtkRecorder:
             f"{k} = {name}" for k, name in enumerate(names)
         )
         if spec.chamber is not None:
-            ring = np.append(np.arange(CHAMBER_SEGMENTS), 0)
-            chamber = _grid(
-                [ring], pv.CellType.POLY_LINE, _circle(spec.chamber.radius, CHAMBER_SEGMENTS)
-            )
+            c = spec.chamber
+            wall = outline_or_circle(c.outline, c.radius, CHAMBER_SEGMENTS)
+            ring = np.append(np.arange(len(wall)), 0)
+            chamber = _grid([ring], pv.CellType.POLY_LINE, wall)
             chamber.save(self.directory / "chamber.vtu", binary=True, compression="zlib")
 
     def record(self, sim: Simulation) -> None:
@@ -257,7 +252,8 @@ def machine_mesh(sim: Simulation) -> pv.UnstructuredGrid:
         joint = hinges.get(body)
         force.append(0.0 if joint is None else joint.impulse * u.IMPULSE / sim.dt)
     rotor = scene.rotor
-    disc = _circle(u.to_internal(scene.spec.rotor.radius, u.LENGTH), ROTOR_SIDES)
+    r = scene.spec.rotor
+    disc = outline_or_circle(r.outline, r.radius, ROTOR_SIDES) / u.LENGTH
     outlines.append(np.array([tuple(rotor.local_to_world(tuple(v))) for v in disc]) * u.LENGTH)
     ends = np.cumsum([0] + [len(o) for o in outlines])
     cells = [np.arange(a, b, dtype=np.int64) for a, b in itertools.pairwise(ends)]

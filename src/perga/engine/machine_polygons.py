@@ -1,10 +1,13 @@
-"""The hammers as soft-contact polygons: posed from their Pymunk bodies, loaded back onto them.
+"""The machine as soft-contact polygons: the hammers posed from their Pymunk bodies and loaded
+back onto them, and a chamber wall drawn from a file (a round wall is the kernel's own circle).
 
 Each convex piece of each hammer becomes one polygon of a :class:`~perga.soft.polygons.PolygonSet`
 (SI), described relative to its body's centre of gravity. How a hammer resists a contact sets
 the contact's effective mass: a hinged hammer is ``PINNED`` at its hinge with I_A; a welded one
 is part of the rotor, ``KINEMATIC`` on a rotor held at ω or ``PINNED`` at the axis with the
-rotor's moment on a driven rotor; a free one is ``FREE`` with M and I_C.
+rotor's moment on a driven rotor; a free one is ``FREE`` with M and I_C. The wall's pieces
+(:func:`perga.engine.scene.chamber_pieces`) come after the hammers' and never move
+(``KINEMATIC``, at rest); only the wall's inner and outer outlines make contacts.
 
 Timing (why the pose is taken ahead). Chipmunk's step drifts positions with the current
 velocities, then kicks them with the applied forces and joint impulses; the soft kernel kicks,
@@ -25,6 +28,7 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.scene import Scene
+from perga.geometry.wall import wall_pieces
 from perga.soft.polygons import FREE, KINEMATIC, PINNED, PolygonSet, piece_features, polygon_set
 
 TORQUE = u.FORCE * u.LENGTH
@@ -37,20 +41,24 @@ def _counter_clockwise(vertices: np.ndarray) -> np.ndarray:
     return vertices if area > 0 else vertices[::-1].copy()
 
 
-class HammerPolygons:
-    """The scene's hammers as a posed ``PolygonSet`` (``self.polygons``): every convex piece of
-    every hammer is a polygon, ``hammer_of[k]`` the hammer polygon k belongs to; pieces of one
-    hammer share its body's motion and inertia, and only the hammer's outline makes contacts
+class MachinePolygons:
+    """The scene's hammers and drawn chamber wall as a posed ``PolygonSet`` (``self.polygons``):
+    every convex piece of every hammer is a polygon, ``hammer_of[k]`` the hammer polygon k
+    belongs to (−1 for the wall's pieces, which follow); pieces of one hammer share its body's
+    motion and inertia, and only the hammer's outline makes contacts
     (``perga.soft.polygons.piece_features``).
 
-    ``materials`` lists the hammers' material names (the polygon table's columns).
+    ``materials`` lists the polygons' material names (the polygon table's columns).
     """
 
     def __init__(self, scene: Scene) -> None:
         self._scene = scene
         self._bodies = scene.hammer_bodies
         specs = scene.spec.hammers
-        self.materials = sorted({h.material for h in specs})
+        chamber = scene.spec.chamber
+        walled = chamber is not None and chamber.outline is not None
+        names = {h.material for h in specs} | ({chamber.material} if walled else set())
+        self.materials = sorted(names)
         driven = scene.rotor.body_type == pymunk.Body.DYNAMIC
         relative, owner, kinds, inertia, solid, corner = [], [], [], [], [], []
         for index, (h, body, shapes) in enumerate(
@@ -58,8 +66,7 @@ class HammerPolygons:
         ):
             cog = body.center_of_gravity
             pieces = [
-                _counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()]))
-                * u.LENGTH
+                _counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()])) * u.LENGTH
                 for s in shapes
             ]
             outline = (np.array(scene.hammer_outlines[index]) - tuple(cog)) * u.LENGTH
@@ -79,29 +86,45 @@ class HammerPolygons:
                 kind, moment = KINEMATIC, math.inf
             kinds += [kind] * len(pieces)
             inertia += [moment] * len(pieces)
+        self._relative = np.concatenate(relative) if relative else np.zeros((0, 2))
+        self._owner = np.repeat(np.array(owner, dtype=np.int64), [len(r) for r in relative])
+        n_hammer = len(relative)
+        materials = [self.materials.index(specs[k].material) for k in owner]
+        if walled:
+            pieces, outer = wall_pieces(np.array(chamber.outline), chamber.wall_thickness)
+            loops = [outer, np.array(chamber.outline)[::-1]]
+            features = piece_features(pieces, loops)
+            offset = len(self._relative)
+            solid.append(features[0])
+            corner.append(np.where(features[1] >= 0, features[1] + offset, -1))
+            relative += pieces
+            owner += [-1] * len(pieces)
+            kinds += [KINEMATIC] * len(pieces)
+            inertia += [math.inf] * len(pieces)
+            materials += [self.materials.index(chamber.material)] * len(pieces)
         self.hammer_of = np.array(owner, dtype=np.int64)
-        """The hammer of each polygon."""
-        self._relative = np.concatenate(relative)
-        self._owner = np.repeat(self.hammer_of, [len(r) for r in relative])
+        """The hammer of each polygon (−1: the wall)."""
+        self._hammer_polygons = n_hammer
+        self._hammer_vertices = len(self._relative)
         self._hinges = np.array(
             [h.hinge_position if h.mount == "hinged" else (0.0, 0.0) for h in specs], dtype=float
         ).reshape(-1, 2)
-        self.machine = np.array([specs[k].mount != "free" for k in owner], dtype=bool)
+        self.machine = np.array([k >= 0 and specs[k].mount != "free" for k in owner], dtype=bool)
         """Which polygons the rotor drives (hinged or welded): their loads enter the drive work."""
         self.polygons: PolygonSet = polygon_set(
             relative,
-            np.zeros((len(relative), 2)),
+            np.array([p.mean(axis=0) for p in relative]),
             kind=kinds,
-            mass=[specs[k].mass for k in owner],
+            mass=[specs[k].mass if k >= 0 else math.inf for k in owner],
             inertia=inertia,
-            mat=[self.materials.index(specs[k].material) for k in owner],
+            mat=materials,
             features=(np.concatenate(solid), np.concatenate(corner)),
         )
         self.pose(0.0)
 
     def pose(self, ahead: float) -> None:
-        """Pose every polygon where its body will be ``ahead`` s from now at its current
-        velocity (positions by v·ahead, angles by ω·ahead), in SI."""
+        """Pose every hammer polygon where its body will be ``ahead`` s from now at its current
+        velocity (positions by v·ahead, angles by ω·ahead), in SI; the wall stays."""
         state = np.array(
             [
                 (*b.local_to_world(b.center_of_gravity), b.angle, *b.velocity, b.angular_velocity)
@@ -116,18 +139,18 @@ class HammerPolygons:
         angle = state[:, 2] + omega * ahead
         c, s = np.cos(angle)[self._owner], np.sin(angle)[self._owner]
         rx, ry = self._relative[:, 0], self._relative[:, 1]
-        p, of = self.polygons, self.hammer_of
-        p.vertices[:, 0] = centre[self._owner, 0] + c * rx - s * ry
-        p.vertices[:, 1] = centre[self._owner, 1] + s * rx + c * ry
-        p.com[:] = centre[of]
-        p.velocity[:] = velocity[of]
-        p.omega[:] = omega[of]
+        p, of, n = self.polygons, self.hammer_of[: self._hammer_polygons], self._hammer_vertices
+        p.vertices[:n, 0] = centre[self._owner, 0] + c * rx - s * ry
+        p.vertices[:n, 1] = centre[self._owner, 1] + s * rx + c * ry
+        p.com[: len(of)] = centre[of]
+        p.velocity[: len(of)] = velocity[of]
+        p.omega[: len(of)] = omega[of]
         rotor = self._scene.rotor
         turn = rotor.angle + rotor.angular_velocity * u.ANGULAR_VELOCITY * ahead
         cr, sr = math.cos(turn), math.sin(turn)
         hx, hy = self._hinges[of, 0], self._hinges[of, 1]
-        p.pivot[:, 0] = cr * hx - sr * hy
-        p.pivot[:, 1] = sr * hx + cr * hy
+        p.pivot[: len(of), 0] = cr * hx - sr * hy
+        p.pivot[: len(of), 1] = sr * hx + cr * hy
 
     def apply_loads(self) -> float:
         """Set the polygons' mean loads (from the last kernel call) as the bodies' force and
@@ -135,7 +158,7 @@ class HammerPolygons:
         the rotor drives, N·m."""
         p = self.polygons
         loads: dict[pymunk.Body, list[float]] = {}
-        for k, hammer in enumerate(self.hammer_of):
+        for k, hammer in enumerate(self.hammer_of[: self._hammer_polygons]):
             load = loads.setdefault(self._bodies[hammer], [0.0, 0.0, 0.0])
             load[0] += p.force[k, 0]
             load[1] += p.force[k, 1]
