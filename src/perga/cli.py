@@ -49,6 +49,25 @@ def _paper_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _accuracy(args: argparse.Namespace) -> int:
+    from perga.studies.accuracy import run_study
+    from perga.studies.accuracy_report import recommended_table, write_outputs
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
+
+    result = run_study(quick=args.quick, progress=progress)
+    paths = write_outputs(result, Path(args.output))
+    print(recommended_table(result.rows), end="")
+    print(
+        f"{len(result.rows)} rows, {len(paths)} files in {args.output}; {result.wall:.0f} s "
+        f"(load {result.load[0]:.2f} -> {result.load[1]:.2f})",
+        file=sys.stderr,
+    )
+    return 0
+
+
 def _validate(args: argparse.Namespace) -> int:
     failed = 0
     for path in args.cases:
@@ -128,6 +147,39 @@ def _render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare(args: argparse.Namespace) -> int:
+    from perga.stats import load_run
+    from perga.studies.compare import analyse, run_paper_study
+    from perga.studies.compare_report import write_report
+    from perga.studies.paper_check import Params
+
+    if not args.runs and not args.paper:
+        print("error: give run directories or --paper", file=sys.stderr)
+        return 2
+    start = time.perf_counter()
+    out = args.output or Path("reports/paper" if args.paper else "reports/compare")
+    try:
+        runs = [load_run(d) for d in args.runs]
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    fitted = _default_case("paper-fitted.toml")
+    if args.paper:
+        work = args.work or out / "runs"
+        runs += run_paper_study(fitted.parent, work, args.processes)
+    analyses = analyse(runs, Params.from_case(load_case(fitted)))
+    command = "perga compare " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["compare"] else ""
+    data = write_report(analyses, out, Params.from_case(load_case(fitted)), command)
+    rows = [r for r in data["rows"] if r["tolerance"] is not None]
+    failed = sum(not r["agrees"] for r in rows)
+    print(
+        f"wrote {out}/report.md ({len(data['figures'])} figures): {len(rows) - failed} of "
+        f"{len(rows)} agreement rows within 1 %, largest error "
+        f"{data['largest_agreement_error']:.2e}; {time.perf_counter() - start:.1f} s"
+    )
+    return 1 if failed else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
@@ -164,6 +216,26 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--trajectories", action="store_true", help="granule paths, by time")
     render.add_argument("-o", "--output", type=Path, help="PNG (default RUN/preview.png)")
     render.set_defaults(handler=_render)
+    accuracy = sub.add_parser(
+        "accuracy", help="work-precision study: error against closed forms vs wall time"
+    )
+    accuracy.add_argument(
+        "-o", "--output", default="accuracy", help="output folder (default: ./accuracy)"
+    )
+    accuracy.add_argument("--quick", action="store_true", help="a small subset (tests, < 30 s)")
+    accuracy.add_argument("--quiet", action="store_true", help="no line per setting on stderr")
+    accuracy.set_defaults(handler=_accuracy)
+    compare = sub.add_parser(
+        "compare", help="runs against the analytical model: Markdown + PNG + JSON report"
+    )
+    compare.add_argument("runs", nargs="*", type=Path, metavar="RUN", help="run directories")
+    compare.add_argument(
+        "--paper", action="store_true", help="run the bundled paper cases and sweeps first"
+    )
+    compare.add_argument("-o", "--output", type=Path, help="report folder (default reports/...)")
+    compare.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
+    compare.add_argument("--processes", type=int, default=2, help="--paper runs in parallel")
+    compare.set_defaults(handler=_compare)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)

@@ -37,9 +37,7 @@ def _l_pieces():
 
 def _split_corner(pieces) -> np.ndarray:
     """The convex corner of the L that two pieces share (the far end of the diagonal)."""
-    shared = [
-        v for v in L_SHAPE if sum(np.any(np.all(p == v, axis=1)) for p in pieces) == 2
-    ]
+    shared = [v for v in L_SHAPE if sum(np.any(np.all(p == v, axis=1)) for p in pieces) == 2]
     return next(v for v in shared if not np.allclose(v, NOTCH))
 
 

@@ -113,7 +113,6 @@ def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
     )
 
 
-
 def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
     """Per granule: the number of contacts now (granule pairs and walls with overlap > 0,
     hammers whose contact the kernel holds active) and the largest of their overlaps, m."""

@@ -1,0 +1,100 @@
+"""A run directory's tables as numpy columns (SI units, as written by perga.output)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from perga.case import load_case
+from perga.case.schema import Case
+
+FloatArray = NDArray[np.float64]
+Columns = dict[str, FloatArray]
+
+
+def read_table(path: Path) -> Columns:
+    """A CSV table with a header row as {column: float array}; empty columns if no rows."""
+    with path.open(encoding="utf-8") as stream:
+        header = stream.readline().strip().split(",")
+        body = stream.read()
+    if not body.strip():
+        return {name: np.empty(0) for name in header}
+    data = np.loadtxt(body.splitlines(), delimiter=",", ndmin=2)
+    return {name: data[:, i] for i, name in enumerate(header)}
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run directory: its case, summary and tables (absent tables are empty dicts)."""
+
+    directory: Path
+    case: Case
+    summary: dict[str, object]
+    granules: Columns = field(repr=False)
+    hammers: Columns = field(repr=False)
+    impacts: Columns = field(repr=False)
+    energy: Columns = field(repr=False)
+
+    @property
+    def name(self) -> str:
+        """The run directory's name."""
+        return self.directory.name
+
+    @property
+    def omega(self) -> float:
+        """Rotor angular velocity of the case, rad/s."""
+        return self.case.rotor.angular_velocity
+
+    def track(self, granule: int = 0) -> Columns:
+        """One granule's rows of granules.csv: time (s), x, y (m), vx, vy (m/s), speed, ..."""
+        rows = self.granules["id"] == granule
+        return {k: v[rows] for k, v in self.granules.items()}
+
+    def rotor_angle(self, t: FloatArray | float) -> FloatArray:
+        """Rotor angle (rad) at times t (s), interpolated in hammers.csv (row id = -1), or ωt
+        for a run without that table (kinematic rotor)."""
+        t = np.asarray(t, dtype=float)
+        if not self.hammers or not self.hammers["id"].size:
+            return self.omega * t
+        rows = self.hammers["id"] == -1
+        return np.interp(t, self.hammers["time"][rows], self.hammers["swing_angle"][rows])
+
+    def hammer_state(self, hammer: int, t: float) -> tuple[float, float]:
+        """(swing angle α in rad, absolute angular velocity Ω in rad/s) of a hammer at the last
+        frame strictly before t (s): a frame at t itself is written after that step's impacts."""
+        rows = np.nonzero(self.hammers["id"] == hammer)[0]
+        times = self.hammers["time"][rows]
+        i = rows[max(int(np.searchsorted(times, t, side="left")) - 1, 0)]
+        return float(self.hammers["swing_angle"][i]), float(self.hammers["angular_velocity"][i])
+
+
+def _optional(path: Path) -> Columns:
+    return read_table(path) if path.exists() else {}
+
+
+def load_run(directory: Path | str) -> Run:
+    """Load a run directory written by ``perga run`` (case.toml and summary.json required)."""
+    directory = Path(directory)
+    for needed in ("case.toml", "summary.json"):
+        if not (directory / needed).exists():
+            raise FileNotFoundError(f"{directory} is not a run directory: no {needed}")
+    return Run(
+        directory=directory,
+        case=load_case(directory / "case.toml"),
+        summary=json.loads((directory / "summary.json").read_text(encoding="utf-8")),
+        granules=_optional(directory / "granules.csv"),
+        hammers=_optional(directory / "hammers.csv"),
+        impacts=_optional(directory / "impacts.csv"),
+        energy=_optional(directory / "energy.csv"),
+    )
+
+
+def hammer_mount_angle(case: Case, hammer: int) -> float:
+    """Angle of a hammer's hinge on the rotor at rotor angle 0, rad (evenly spaced default)."""
+    h = case.hammers
+    return h.angles[hammer] if h.angles else 2 * math.pi * hammer / h.count
