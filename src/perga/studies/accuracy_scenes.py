@@ -158,18 +158,23 @@ FACE_WIDTH = 0.02
 """Width of the welded plates of the restitution and bounce scenes, m (face at y = width/2)."""
 
 
+def _welded_plate(length: float) -> dict:
+    """[hammers] of one 0.1 kg plate welded at the axis, ``length`` (m) along +x."""
+    return {
+        "mass": 0.1,
+        "hinge_radius": 0.0,
+        "mount": "welded",
+        "shape": {"kind": "plate", "length": length, "width": FACE_WIDTH},
+    }
+
+
 def restitution_scene() -> Scene:
     """Head-on impact at 2 m/s on a welded plate's face, e = 0.7; touch after 0.5 ms."""
     speed, gap = 2.0, 1e-3
     data = _base(
         0.7,
         omega=1e-6,
-        hammers={
-            "mass": 0.1,
-            "hinge_radius": 0.0,
-            "mount": "welded",
-            "shape": {"kind": "plate", "length": 0.1, "width": FACE_WIDTH},
-        },
+        hammers=_welded_plate(0.1),
         chamber=0.2,
     )
     start = (0.05, FACE_WIDTH / 2 + RADIUS + gap)
@@ -297,12 +302,7 @@ def bounce_scene(gravity: float) -> Scene:
     data = _base(
         BOUNCE["e"],
         omega=1e-6,
-        hammers={
-            "mass": 0.1,
-            "hinge_radius": 0.0,
-            "mount": "welded",
-            "shape": {"kind": "plate", "length": 0.2, "width": FACE_WIDTH},
-        },
+        hammers=_welded_plate(0.2),
         chamber=0.25,
     )
     data["rotor"]["plane"] = "vertical"
