@@ -29,7 +29,12 @@ pieces) are not solid; a corner contact counts only on the piece that owns a con
 the outline, and only while the disc centre lies in that corner's region of the outline (between
 the normals of the outline's two edges there). So a disc touching one face or corner of the
 outline gets one contact whichever pieces it overlaps, and a disc in a concave notch gets one
-per face it touches (``piece_features``; ``PolygonSet.solid`` and ``corner``).
+per face it touches (``piece_features``; ``PolygonSet.solid`` and ``corner``). Where two faces
+meet at a shallow concave joint (turning by less than ``SMOOTH_TURN``, e.g. the 2° joints of a
+drawn round chamber) a disc near the joint overlaps both by nearly the same depth although it
+presses on what is nearly one flat face: each face's contact then counts only on its side of
+the joint's bisector, so the disc gets one contact (two would double the force: a granule with
+e = 0.7 fired straight at a 2° joint left at 0.612).
 
 Contact law: ``perga.soft.contacts.contact_force``, the same law (and the same time
 discretisation and dissipation) as granule pairs and walls, clamped at zero (``end="force"``,
@@ -122,6 +127,12 @@ N_CHUNKS = 64
 
 _LAWS = {"linear": LINEAR, "hertz": HERTZ}
 
+CORNER, SMOOTH_JOINT = 1, 2
+"""Kinds of outline vertices (``PolygonSet.corner[:, 2]``)."""
+SMOOTH_TURN = math.radians(15.0)
+"""Concave joints turning by less than this (rad) split their faces' contacts at the bisector;
+sharper ones (a 90° notch) keep a contact per face the disc touches."""
+
 
 @dataclass
 class PolygonSet:
@@ -137,9 +148,12 @@ class PolygonSet:
     mat (n_poly,) int32: material index (column of the ``ContactTable``);
     solid (n_vertices,) int8: 1 where the edge from this vertex to the next is on the outline
     of the body, 0 on a seam between convex pieces of one body (never a contact);
-    corner (n_vertices, 2) int64: for a vertex this polygon owns as a convex corner of its
-    body's outline, the indices (into ``vertices``) of the outline's vertices before and after
-    it (the corner's region lies between their edges' normals), else (−1, −1).
+    corner (n_vertices, 3) int64: per vertex on its body's outline, the indices (into
+    ``vertices``) of the outline's vertices before and after it, and its kind: ``CORNER``, a
+    convex corner this polygon owns (a contact there counts while the disc centre is in the
+    corner's region, between the two edges' normals); ``SMOOTH_JOINT``, a concave joint turning
+    by less than ``SMOOTH_TURN`` (a face's contact there counts only on the face's side of the
+    joint's bisector); 0 otherwise (−1, −1, 0 off the outline).
     Loads on each polygon: force (n_poly, 2), N; torque (n_poly,) about com, N·m; moment
     (n_poly,) about the world origin (0, 0), N·m. ``polygon_contacts`` adds to them (zero them
     with ``clear_loads`` first); ``SoftGranules.step`` sets them to the mean over its call.
@@ -281,8 +295,8 @@ def polygon_set(
             raise ValueError(f"polygon {k}: unknown kind {kinds[k]}")
     solid, corner = features if features is not None else whole_features(polys)
     n_vertices = int(start[-1])
-    if solid.shape != (n_vertices,) or corner.shape != (n_vertices, 2):
-        raise ValueError(f"features must have shapes ({n_vertices},) and ({n_vertices}, 2)")
+    if solid.shape != (n_vertices,) or corner.shape != (n_vertices, 3):
+        raise ValueError(f"features must have shapes ({n_vertices},) and ({n_vertices}, 3)")
     return PolygonSet(
         vertices=np.ascontiguousarray(np.concatenate(polys, axis=0)),
         start=start,
@@ -306,7 +320,8 @@ def whole_features(polygons: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         m = len(p)
         local = np.arange(m)
         solid.append(np.ones(m, dtype=np.int8))
-        corner.append(offset + np.stack([(local - 1) % m, (local + 1) % m], axis=1))
+        ends = offset + np.stack([(local - 1) % m, (local + 1) % m], axis=1)
+        corner.append(np.column_stack([ends, np.full(m, CORNER)]))
         offset += m
     return np.concatenate(solid), np.concatenate(corner).astype(np.int64)
 
@@ -319,8 +334,9 @@ def piece_features(
     clockwise), vertex indices counted over the pieces concatenated (``PolygonSet`` doc).
 
     An edge is solid when its midpoint lies on a loop; a loop vertex where the body is convex
-    (turning left) is owned by the first piece that has it. Lengths in any unit; ``rel_tol``
-    is relative to the body's size.
+    (turning left) is owned by the first piece that has it; one turning right by less than
+    ``SMOOTH_TURN`` is a smooth joint in every piece that has it. Lengths in any unit;
+    ``rel_tol`` is relative to the body's size.
     """
     flat = np.concatenate(pieces)
     tol = rel_tol * float(np.ptp(np.concatenate(loops), axis=0).max())
@@ -328,6 +344,9 @@ def piece_features(
 
     def index_of(point: np.ndarray) -> int:
         return int(np.argmin(np.hypot(*(flat - point).T)))
+
+    def copies(point: np.ndarray) -> np.ndarray:
+        return np.nonzero(np.hypot(*(flat - point).T) <= tol)[0]
 
     def on_loop(point: np.ndarray) -> bool:
         a, b = segments[:, 0], segments[:, 1]
@@ -337,15 +356,18 @@ def piece_features(
 
     edges = [zip(p, np.roll(p, -1, axis=0), strict=True) for p in pieces]
     solid = np.array([on_loop(0.5 * (v + w)) for e in edges for v, w in e], dtype=np.int8)
-    corner = np.full((len(flat), 2), -1, dtype=np.int64)
+    corner = np.tile(np.array([-1, -1, 0], dtype=np.int64), (len(flat), 1))
     for loop in loops:
         turns = zip(np.roll(loop, 1, axis=0), loop, np.roll(loop, -1, axis=0), strict=True)
         for before, vertex, after in turns:
             (ax, ay), (bx, by) = vertex - before, after - vertex
-            turn = ax * by - ay * bx
-            owner = index_of(vertex)
-            if turn > 0 and np.hypot(*(flat[owner] - vertex)) <= tol:
-                corner[owner] = (index_of(before), index_of(after))
+            angle = math.atan2(ax * by - ay * bx, ax * bx + ay * by)  # > 0: convex
+            ends = (index_of(before), index_of(after))
+            at = copies(vertex)
+            if angle > 0 and len(at):
+                corner[at[0]] = (*ends, CORNER)
+            elif -SMOOTH_TURN < angle <= 0:
+                corner[at] = (*ends, SMOOTH_JOINT)
     return solid, corner
 
 
@@ -425,7 +447,7 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
         pivot=empty.copy(),
         mat=np.zeros(0, np.int32),
         solid=np.zeros(0, np.int8),
-        corner=np.zeros((0, 2), np.int64),
+        corner=np.zeros((0, 3), np.int64),
     )
     table = ContactTable(
         law=np.zeros((0, 0), np.int32),
@@ -439,17 +461,48 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
 
 
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def _separation(px, py, verts, lo, hi):
+    """Largest signed distance of (px, py) from the lines of the convex polygon verts[lo:hi]'s
+    edges, m: a lower bound of its distance from the polygon (whatever features count)."""
+    s_max = -np.inf
+    for q in range(lo, hi):
+        qb = q + 1 if q + 1 < hi else lo
+        ex = verts[qb, 0] - verts[q, 0]
+        ey = verts[qb, 1] - verts[q, 1]
+        s = ((px - verts[q, 0]) * ey - (py - verts[q, 1]) * ex) / math.sqrt(ex * ex + ey * ey)
+        s_max = max(s_max, s)
+    return s_max
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def _past_joint(px, py, verts, corner, q):
+    """(p − V)·(u_in + u_out) at the joint V = verts[q] (unit directions of the outline's edges
+    into and out of V): < 0 on the incoming edge's side of the joint's bisector, > 0 beyond."""
+    vx = verts[q, 0]
+    vy = verts[q, 1]
+    ix = vx - verts[corner[q, 0], 0]
+    iy = vy - verts[corner[q, 0], 1]
+    ox = verts[corner[q, 1], 0] - vx
+    oy = verts[corner[q, 1], 1] - vy
+    li = math.sqrt(ix * ix + iy * iy)
+    lo = math.sqrt(ox * ox + oy * oy)
+    return (px - vx) * (ix / li + ox / lo) + (py - vy) * (iy / li + oy / lo)
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def closest_feature(px, py, poly, k):
     """Signed distance d of (px, py) to polygon k of ``poly`` (``PolygonSet.arrays()``; < 0
     inside) and the normal n, over the polygon's solid features only (``PolygonSet`` doc).
 
     Outside: d = distance to the closest point of a solid edge, n from that point to the centre;
     a closest point at a corner counts only if the polygon owns the corner and the centre lies
-    in the corner's region of the whole outline, else there is no contact (d = inf, n = 0).
+    in the corner's region of the whole outline, one inside an edge ending at a smooth joint
+    only on the edge's side of the joint's bisector; else there is no contact (d = inf, n = 0).
     Inside: d = largest signed distance to a solid edge (≤ 0), n = that edge's outward normal.
     Returns (d, n_x, n_y), m and unit vector.
     """
     verts, start, solid, corner = poly[0], poly[1], poly[10], poly[11]
+    first = last = -1
     lo = start[k]
     m = start[k + 1] - lo
     s_all = -np.inf
@@ -496,18 +549,23 @@ def closest_feature(px, py, poly, k):
             qx_min = qx
             qy_min = qy
             vertex = lo + j if t == 0.0 else (jb if t == 1.0 else -1)
+            first, last = lo + j, jb
     if d2_min == np.inf:
         return np.inf, 0.0, 0.0
     if vertex >= 0:
-        before, after = corner[vertex, 0], corner[vertex, 1]
-        if before < 0:
+        if corner[vertex, 2] != CORNER:
             return np.inf, 0.0, 0.0
         vx = verts[vertex, 0]
         vy = verts[vertex, 1]
+        before, after = corner[vertex, 0], corner[vertex, 1]
         into = (px - vx) * (vx - verts[before, 0]) + (py - vy) * (vy - verts[before, 1])
         out = (px - vx) * (verts[after, 0] - vx) + (py - vy) * (verts[after, 1] - vy)
         if into < 0.0 or out > 0.0:
             return np.inf, 0.0, 0.0
+    elif (corner[first, 2] == SMOOTH_JOINT and _past_joint(px, py, verts, corner, first) < 0.0) or (
+        corner[last, 2] == SMOOTH_JOINT and _past_joint(px, py, verts, corner, last) > 0.0
+    ):
+        return np.inf, 0.0, 0.0
     d = math.sqrt(d2_min)
     return d, (px - qx_min) / d, (py - qy_min) / d
 
@@ -694,7 +752,9 @@ def _polygon_contacts(x, v, w, r, m, mat, poly, table, dt, hist, f, tq, loads):
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
 def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
     """Whether pair (i, k) goes in the candidate list: in contact, or (1 − ½ dt|ω|)(d − r_i) <
-    reach[k] (``candidates``); slack[k] = 1 − ½ dt|ω_k|."""
+    reach[k] (``candidates``), d the separation from the polygon's edge lines (a lower bound of
+    the distance, so that a piece whose features do not count here now is still listed);
+    slack[k] = 1 − ½ dt|ω_k|."""
     if hist[i, k, HIST_ACTIVE] != 0.0 or slack[k] <= 0.0:
         return True
     px = x_ref[i, 0]
@@ -704,8 +764,7 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
     dy = py - poly[2][k, 1]
     if dx * dx + dy * dy >= (rho[k] + limit) ** 2:  # outside the bounding circle: cheap reject
         return False
-    d, _, _ = closest_feature(px, py, poly, k)
-    return d < limit
+    return _separation(px, py, poly[0], poly[1][k], poly[1][k + 1]) < limit
 
 
 @nb.njit(cache=True, parallel=True)
