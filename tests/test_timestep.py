@@ -83,3 +83,18 @@ def test_given_soft_step_is_the_granule_step(tmp_path):
     plan = step_plan(case)
     assert (plan.granule, plan.governed_by) == (1e-6, "given")
     assert plan.machine == pytest.approx(3e-6, rel=1e-15)
+
+
+def test_gravity_in_the_plane_adds_a_fall_across_the_chamber(tmp_path):
+    """A vertical rotor: a granule can fall across the chamber, √(2g·2R) on top of the rotor's
+    speeds (R = 0.2 m: 2.80 m/s), so a Hertz contact is planned at that speed, not at rest."""
+    flat = _case(tmp_path, "")
+    floor = '[effects.floor_friction]\nfloor = "stationary"\nfriction = 0.35\n'
+    assert floor in SINGLE
+    text = SINGLE.replace(floor, "[effects.gravity_in_plane]\n")
+    path = tmp_path / "vertical.toml"
+    path.write_text(text.replace('plane = "horizontal"', 'plane = "vertical"'))
+    vertical = load_case(path)
+    assert fastest_relative_speed(vertical) == pytest.approx(
+        fastest_relative_speed(flat) + math.sqrt(4 * 9.80665 * 0.2), rel=1e-12
+    )

@@ -18,6 +18,7 @@ import numpy as np
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_time_step
 from perga.case.hammer_geometry import hammer_geometry
+from perga.case.parts import chamber_geometry
 from perga.case.schema import Case, ExplicitPlacement
 
 MAX_ROTATION_PER_STEP = 0.05
@@ -27,13 +28,18 @@ resolved."""
 
 def fastest_relative_speed(case: Case) -> float:
     """Upper bound on a granule's speed relative to a hammer or the wall, m/s: the hammer tip's
-    speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed."""
+    speed on the rotor, plus a free hammer's speed, plus the fastest initial granule speed,
+    plus with gravity in the plane the speed of a fall across the chamber, √(2g·2R) (R: the
+    wall's farthest point from the axis)."""
     h = case.hammers
     tip = h.hinge_radius + hammer_geometry(case).tip
     speed = case.rotor.angular_velocity * tip + math.hypot(*h.velocity)
     placement = case.granules.placement
     if isinstance(placement, ExplicitPlacement) and placement.velocities:
         speed += float(np.max(np.hypot(*np.array(placement.velocities, dtype=float).T)))
+    wall = chamber_geometry(case)
+    if case.effects.gravity_in_plane is not None and wall is not None:
+        speed += math.sqrt(4.0 * case.gravity * wall.outer_radius)
     return speed
 
 
