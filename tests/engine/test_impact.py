@@ -127,6 +127,12 @@ def test_hinged_hammer_on_kinematic_rotor() -> None:
         spin_before = body.angular_velocity / units.TIME  # rad/s
         sim.step()
     (impact,) = sim.impacts
+    # the impact row's pre-impact state: Ω before the impulses, α after the step's drift
+    assert impact.hammer_angular_velocity_before == pytest.approx(spin_before, rel=1e-12)
+    assert impact.hammer_swing_angle_before == pytest.approx(
+        sim.hammer_swing_angles()[0], rel=1e-12, abs=1e-15
+    )
+    assert impact.granule_velocity_before == (0.0, 0.0)
     # positions have already advanced in the impact step (step order), velocities have not
     hinge = np.array(body.position) * units.LENGTH
     centre = np.array(body.local_to_world(body.center_of_gravity)) * units.LENGTH

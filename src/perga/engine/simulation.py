@@ -62,7 +62,13 @@ class Impact:
     normal: n; granule_energy_gain: change of the granule's kinetic energy (translation and
     spin) over the step, J; dissipated: energy lost in this contact, −J·v̄_rel with v̄_rel the
     mean of the relative contact velocity before and after (exact for one impulse), J;
-    hammer_energy_before: the hammer's kinetic energy ½Mv_c² + ½I_cΩ² before the step, J.
+    hammer_energy_before: the hammer's kinetic energy ½Mv_c² + ½I_cΩ² before the step, J;
+    granule_velocity_before: the granule's velocity in the fixed frame before the step, m/s;
+    hammer_swing_angle_before, hammer_angular_velocity_before: the hammer's α (rad) and
+    absolute angular velocity Ω (rad/s) at the contact's start. Rigid: α after the step's
+    position update (Chipmunk moves bodies, then finds contacts), velocities and energies
+    before its impulses. Soft (:mod:`~perga.engine.soft_impacts`): the granule's velocity
+    before the kernel call in which the contact began, the hammer's state after that step.
     """
 
     time: float
@@ -78,6 +84,9 @@ class Impact:
     granule_energy_gain: float
     dissipated: float
     hammer_energy_before: float
+    granule_velocity_before: tuple[float, float]
+    hammer_swing_angle_before: float
+    hammer_angular_velocity_before: float
 
 
 def _contact(arbiter: pymunk.Arbiter) -> tuple[pymunk.Vec2d, pymunk.Vec2d, pymunk.Vec2d]:
@@ -98,18 +107,34 @@ def _granule_energy(body: pymunk.Body) -> float:
     return 0.5 * body.mass * body.velocity.length_squared + spin
 
 
-def hammer_energy(scene: Scene, index: int) -> float:
-    """½Mv_c² + ½I_cΩ² of hammer ``index`` now, J (welded ones: moving with the rotor)."""
+@dataclass(frozen=True)
+class HammerState:
+    """A hammer now: kinetic energy ½Mv_c² + ½I_cΩ², J; swing angle α, rad; absolute angular
+    velocity Ω, rad/s (welded hammers move with the rotor: their α is the spec's)."""
+
+    energy: float
+    swing_angle: float
+    angular_velocity: float
+
+
+def hammer_state(scene: Scene, index: int) -> HammerState:
+    """The :class:`HammerState` of hammer ``index`` now."""
     spec = scene.spec.hammers[index]
     body = scene.hammer_bodies[index]
-    centre = (
-        _welded_com(spec, body)
-        if body is scene.rotor
-        else body.local_to_world(body.center_of_gravity)
-    )
+    welded = body is scene.rotor
+    centre = _welded_com(spec, body) if welded else body.local_to_world(body.center_of_gravity)
     v = body.velocity_at_world_point(centre) * u.VELOCITY
     spin = body.angular_velocity * u.ANGULAR_VELOCITY
-    return 0.5 * spec.mass * v.length_squared + 0.5 * spec.moment_about_centre * spin**2
+    return HammerState(
+        energy=0.5 * spec.mass * v.length_squared + 0.5 * spec.moment_about_centre * spin**2,
+        swing_angle=spec.swing_angle
+        if welded
+        else body.angle - scene.rotor.angle - spec.angle_on_rotor,
+        angular_velocity=spin,
+    )
+
+
+_Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, HammerState]
 
 
 class ImpactRecorder:
@@ -120,7 +145,8 @@ class ImpactRecorder:
         self.time = 0.0
         self._scene = scene
         self._owner = scene.shape_owner
-        self._pending: dict[tuple[int, int], tuple[pymunk.Vec2d, float, float]] = {}
+        # (granule, hammer) -> relative contact velocity, granule KE and velocity, hammer state
+        self._pending: dict[tuple[int, int], _Pending] = {}
         scene.on_granule_hammer(
             begin=self._begin, post_solve=self._post_solve, separate=self._separate
         )
@@ -132,15 +158,16 @@ class ImpactRecorder:
     def _begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         key = self._key(arbiter)
         relative, _, _ = _contact(arbiter)
-        granule_energy = _granule_energy(arbiter.shapes[0].body)
-        self._pending[key] = (relative, granule_energy, hammer_energy(self._scene, key[1]))
+        body = arbiter.shapes[0].body
+        state = hammer_state(self._scene, key[1])
+        self._pending[key] = (relative, _granule_energy(body), body.velocity, state)
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         key = self._key(arbiter)
         pending = self._pending.pop(key, None)
         if pending is None:
             return
-        before, granule_energy, hammer_energy_before = pending
+        before, granule_energy, granule_velocity, hammer = pending
         after, point, n = _contact(arbiter)
         t = n.perpendicular()
         # measured: total_impulse is the impulse on the first shape's body (the granule)
@@ -161,7 +188,10 @@ class ImpactRecorder:
                 granule_energy_gain=(_granule_energy(arbiter.shapes[0].body) - granule_energy)
                 * joule,
                 dissipated=-impulse.dot((before + after) * 0.5) * joule,
-                hammer_energy_before=hammer_energy_before,
+                hammer_energy_before=hammer.energy,
+                granule_velocity_before=u.vec_to_si(tuple(granule_velocity), u.VELOCITY),
+                hammer_swing_angle_before=hammer.swing_angle,
+                hammer_angular_velocity_before=hammer.angular_velocity,
             )
         )
 
@@ -257,14 +287,8 @@ class Simulation:
     def hammer_swing_angles(self) -> FloatArray:
         """α of each hammer: its axis angle relative to the radial line through the hinge on
         the turning rotor, rad (constant for welded hammers)."""
-        rotor_angle = self.scene.rotor.angle
-        out = []
-        for spec, body in zip(self.scene.spec.hammers, self.scene.hammer_bodies, strict=True):
-            if body is self.scene.rotor:
-                out.append(spec.swing_angle)
-            else:
-                out.append(body.angle - rotor_angle - spec.angle_on_rotor)
-        return np.array(out, dtype=float)
+        hammers = range(len(self.scene.spec.hammers))
+        return np.array([hammer_state(self.scene, i).swing_angle for i in hammers], dtype=float)
 
     def hammer_angular_velocities(self) -> FloatArray:
         """Absolute angular velocity of each hammer, (n,) array, rad/s (welded: the rotor's)."""

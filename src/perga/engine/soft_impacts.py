@@ -13,11 +13,12 @@ An impact is written when it ends; its ``time`` is the end of the Pymunk step in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from perga.engine.simulation import Impact
+from perga.engine.simulation import HammerState, Impact
 from perga.soft import SoftGranules
 from perga.soft.polygons import HIST_ACTIVE, HIST_DISSIPATED, HIST_NORMAL_IMPULSE, closest_feature
 
@@ -31,7 +32,8 @@ class _Start:
     tangential_velocity: float
     point: tuple[float, float]
     granule_energy: float
-    hammer_energy: float
+    granule_velocity: tuple[float, float]
+    hammer: HammerState
 
 
 def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
@@ -43,13 +45,18 @@ class SoftImpactLog:
     """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
     of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
     its own); call :meth:`before` before and :meth:`after` after every kernel call.
-    ``hammer_energy(h)`` gives hammer h's kinetic energy now, J."""
+    ``hammer_state(h)`` gives hammer h's :class:`~perga.engine.simulation.HammerState` now."""
 
-    def __init__(self, granules: SoftGranules, hammer_of: np.ndarray, hammer_energy) -> None:
+    def __init__(
+        self,
+        granules: SoftGranules,
+        hammer_of: np.ndarray,
+        hammer_state: Callable[[int], HammerState],
+    ) -> None:
         self.impacts: list[Impact] = []
         self._g = granules
         self._hammer_of = hammer_of
-        self._hammer_energy = hammer_energy
+        self._hammer_state = hammer_state
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
         self._open: dict[tuple[int, int], _Start] = {}
         self._x = granules.x.copy()
@@ -116,7 +123,8 @@ class SoftImpactLog:
             tangential_velocity=vt,
             point=point,
             granule_energy=self._energy(i, self._v[i], float(self._w[i])),
-            hammer_energy=self._hammer_energy(int(self._hammer_of[k])),
+            granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
+            hammer=self._hammer_state(int(self._hammer_of[k])),
         )
 
     def _close(self, i: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
@@ -141,6 +149,9 @@ class SoftImpactLog:
                 normal=start.normal,
                 granule_energy_gain=self._energy(i, g.v[i], float(g.w[i])) - start.granule_energy,
                 dissipated=float(row[HIST_DISSIPATED]),
-                hammer_energy_before=start.hammer_energy,
+                hammer_energy_before=start.hammer.energy,
+                granule_velocity_before=start.granule_velocity,
+                hammer_swing_angle_before=start.hammer.swing_angle,
+                hammer_angular_velocity_before=start.hammer.angular_velocity,
             )
         )

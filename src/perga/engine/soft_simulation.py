@@ -29,7 +29,7 @@ from perga.engine.effects import Kick, run_kicks
 from perga.engine.energy import EnergyLedger, LedgerTerms
 from perga.engine.machine_polygons import MachinePolygons
 from perga.engine.scene import Scene, build_scene
-from perga.engine.simulation import FloatArray, Impact, Simulation, hammer_energy
+from perga.engine.simulation import FloatArray, Impact, Simulation, hammer_state
 from perga.engine.soft_build import soft_granules
 from perga.engine.soft_impacts import SoftImpactLog
 from perga.engine.spec import SceneSpec
@@ -55,7 +55,7 @@ class SoftSimulation(Simulation):
         self._kicks = [e for e in scene.effects if isinstance(e, Kick)]
         self._kick_positions = any(k.needs_positions for k in self._kicks)
         self.log = (
-            SoftImpactLog(self.granules, self.machine.hammer_of, lambda k: hammer_energy(scene, k))
+            SoftImpactLog(self.granules, self.machine.hammer_of, lambda k: hammer_state(scene, k))
             if record_impacts
             else None
         )

@@ -99,8 +99,13 @@ class HammerRecorder(TableRecorder):
 
 
 def _impact_columns() -> tuple[str, ...]:
-    """Impact's fields, its two vectors split into components (point -> x, y; normal -> nx, ny)."""
-    split = {"point": ("x", "y"), "normal": ("nx", "ny")}
+    """Impact's fields, its vectors split into components (point -> x, y; normal -> nx, ny;
+    granule_velocity_before -> vx_before, vy_before)."""
+    split = {
+        "point": ("x", "y"),
+        "normal": ("nx", "ny"),
+        "granule_velocity_before": ("vx_before", "vy_before"),
+    }
     return tuple(c for f in fields(Impact) for c in split.get(f.name, (f.name,)))
 
 

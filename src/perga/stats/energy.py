@@ -114,12 +114,9 @@ def all_impacts(run: Run) -> list[ImpactStats]:
 
 def hinged_prediction(run: Run, index: int) -> HingedImpact:
     """:func:`perga.analytic.impact.hinged_impact` for impact ``index`` of a plate hammer hinged
-    on a rotor turning at constant ω, from the recorded state: contact point and normal
-    (impacts.csv), the hinge at the rotor angle of the impact (hammers.csv), the hammer's swing
-    angle and Ω and the granule's velocity at the last frame before the impact.
-
-    Frictionless and instantaneous: the hammer's state between its last frame and the impact
-    is taken as unchanged (exact while it turns rigidly with the rotor, as before a first hit).
+    on a rotor turning at constant ω, from the impact's row of impacts.csv: contact point and
+    normal, the granule's velocity and the hammer's swing angle and Ω at the impact, and the
+    hinge at the rotor angle of the impact (hammers.csv). Frictionless and instantaneous.
     """
     case = run.case
     if case.hammers.mount != "hinged" or case.hammers.shape.kind != "plate":
@@ -128,22 +125,19 @@ def hinged_prediction(run: Run, index: int) -> HingedImpact:
     hammer, t = int(row["hammer"]), row["time"]
     plate = case.hammer_plate
     hinge_angle = float(run.rotor_angle(t)) + hammer_mount_angle(case, hammer)
-    alpha, spin = run.hammer_state(hammer, t)
-    axis = hinge_angle + alpha
+    axis = hinge_angle + row["hammer_swing_angle_before"]
     hinge = case.hammers.hinge_radius * np.array([math.cos(hinge_angle), math.sin(hinge_angle)])
     normal = np.array([row["nx"], row["ny"]])
-    track = run.track(int(row["granule"]))
-    i = max(int(np.searchsorted(track["time"], t, side="left")) - 1, 0)
     return hinged_impact(
         M=case.hammers.mass,
         I_A=plate.inertia_about_hinge,
         r_c=plate.hinge_to_centre_of_mass * np.array([math.cos(axis), math.sin(axis)]),
         r_k=np.array([row["x"], row["y"]]) - hinge,
         n=normal / np.hypot(*normal),
-        Omega=spin,
+        Omega=row["hammer_angular_velocity_before"],
         v_A=run.omega * np.array([-hinge[1], hinge[0]]),
         m=case.granule_mass,
-        v_g=np.array([track["vx"][i], track["vy"][i]]),
+        v_g=np.array([row["vx_before"], row["vy_before"]]),
         e=case.granule_hammer_contact.restitution,
     )
 

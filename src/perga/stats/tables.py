@@ -64,14 +64,6 @@ class Run:
         rows = self.hammers["id"] == -1
         return np.interp(t, self.hammers["time"][rows], self.hammers["swing_angle"][rows])
 
-    def hammer_state(self, hammer: int, t: float) -> tuple[float, float]:
-        """(swing angle α in rad, absolute angular velocity Ω in rad/s) of a hammer at the last
-        frame strictly before t (s): a frame at t itself is written after that step's impacts."""
-        rows = np.nonzero(self.hammers["id"] == hammer)[0]
-        times = self.hammers["time"][rows]
-        i = rows[max(int(np.searchsorted(times, t, side="left")) - 1, 0)]
-        return float(self.hammers["swing_angle"][i]), float(self.hammers["angular_velocity"][i])
-
 
 def _optional(path: Path) -> Columns:
     return read_table(path) if path.exists() else {}

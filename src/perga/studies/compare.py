@@ -465,7 +465,7 @@ def _hinged_rows(run: Run, a: Analysis, stats: list) -> None:
                 if first
                 else f"tangential slip {abs(run.impacts['tangential_velocity_before'][i]):.2f} m/s "
                 f"against {s.approach_speed:.2f} m/s normal: friction, which the frictionless "
-                "law leaves out, and the hammer's swing since its last frame",
+                "law leaves out (the state at the impact is the recorded one)",
             )
         )
         if first:
