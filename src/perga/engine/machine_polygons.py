@@ -28,17 +28,12 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.scene import Scene
+from perga.geometry.polygon import counter_clockwise
 from perga.geometry.wall import wall_pieces
 from perga.soft.polygons import FREE, KINEMATIC, PINNED, PolygonSet, piece_features, polygon_set
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit."""
-
-
-def _counter_clockwise(vertices: np.ndarray) -> np.ndarray:
-    x, y = vertices[:, 0], vertices[:, 1]
-    area = np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
-    return vertices if area > 0 else vertices[::-1].copy()
 
 
 class MachinePolygons:
@@ -66,11 +61,11 @@ class MachinePolygons:
         ):
             cog = body.center_of_gravity
             pieces = [
-                _counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()])) * u.LENGTH
+                counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()])) * u.LENGTH
                 for s in shapes
             ]
             outline = (np.array(scene.hammer_outlines[index]) - tuple(cog)) * u.LENGTH
-            features = piece_features(pieces, [_counter_clockwise(outline)])
+            features = piece_features(pieces, [counter_clockwise(outline)])
             offset = sum(len(r) for r in relative)
             solid.append(features[0])
             corner.append(np.where(features[1] >= 0, features[1] + offset, -1))

@@ -35,7 +35,7 @@ Accessors return the values as Chipmunk holds them, converted to SI.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pymunk
@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 
 from perga.engine import units as u
 from perga.engine.energy import EnergyLedger, EnergyMeter
+from perga.engine.outline_contacts import OutlineFilter
 from perga.engine.scene import Scene
 from perga.engine.spec import HammerSpec
 from perga.engine.state import GranuleReader
@@ -138,41 +139,69 @@ _Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, HammerState]
 
 
 class ImpactRecorder:
-    """Records the first step of every granule-hammer contact as an :class:`Impact`."""
+    """Records the first step of every granule-hammer contact as an :class:`Impact`.
 
-    def __init__(self, scene: Scene) -> None:
+    A granule touching two convex pieces of one hammer in the same step (a notch) makes two
+    Chipmunk contacts but one impact: their impulses along the first contact's normal and their
+    dissipation are summed into the first one's row. With ``filtered`` (hammers of several
+    pieces: :mod:`~perga.engine.outline_contacts` drops contacts in ``pre_solve``) an impact
+    starts at a contact's first step that is processed, not at its ``begin``.
+    """
+
+    def __init__(self, scene: Scene, *, filtered: bool = False) -> None:
         self.impacts: list[Impact] = []
         self.time = 0.0
         self._scene = scene
         self._owner = scene.shape_owner
-        # (granule, hammer) -> relative contact velocity, granule KE and velocity, hammer state
-        self._pending: dict[tuple[int, int], _Pending] = {}
-        scene.on_granule_hammer(
-            begin=self._begin, post_solve=self._post_solve, separate=self._separate
-        )
+        # (granule shape, hammer shape) -> relative contact velocity, granule KE and velocity,
+        # hammer state (None once recorded); (granule, hammer) -> its impact's row in this step
+        self._pending: dict[tuple[pymunk.Shape, pymunk.Shape], _Pending | None] = {}
+        self._rows: dict[tuple[int, int], int] = {}
+        self._rows_time = -1.0
+        start = "pre_solve" if filtered else "begin"
+        scene.listen(start, self._start, ("granule", "hammer"))
+        scene.on_granule_hammer(post_solve=self._post_solve, separate=self._separate)
 
     def _key(self, arbiter: pymunk.Arbiter) -> tuple[int, int]:
         granule_shape, hammer_shape = arbiter.shapes
         return self._owner[granule_shape][1], self._owner[hammer_shape][1]
 
-    def _begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-        key = self._key(arbiter)
+    def _start(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        if not arbiter.process_collision or tuple(arbiter.shapes) in self._pending:
+            return
         relative, _, _ = _contact(arbiter)
         body = arbiter.shapes[0].body
-        state = hammer_state(self._scene, key[1])
-        self._pending[key] = (relative, _granule_energy(body), body.velocity, state)
+        state = hammer_state(self._scene, self._key(arbiter)[1])
+        pending = (relative, _granule_energy(body), body.velocity, state)
+        self._pending[tuple(arbiter.shapes)] = pending  # type: ignore[index]
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-        key = self._key(arbiter)
-        pending = self._pending.pop(key, None)
+        shapes = tuple(arbiter.shapes)
+        pending = self._pending.get(shapes)  # type: ignore[call-overload]
         if pending is None:
             return
+        self._pending[shapes] = None  # type: ignore[index]
+        key = self._key(arbiter)
         before, granule_energy, granule_velocity, hammer = pending
         after, point, n = _contact(arbiter)
         t = n.perpendicular()
         # measured: total_impulse is the impulse on the first shape's body (the granule)
         impulse = arbiter.total_impulse
         joule = u.to_si(1.0, u.ENERGY)
+        dissipated = -impulse.dot((before + after) * 0.5) * joule
+        if self._rows_time != self.time:
+            self._rows, self._rows_time = {}, self.time
+        row = self._rows.get(key)
+        if row is not None:  # a second piece of the same hammer in the same step
+            first = self.impacts[row]
+            n_first = pymunk.Vec2d(*first.normal)
+            self.impacts[row] = replace(
+                first,
+                normal_impulse=first.normal_impulse + u.to_si(impulse.dot(n_first), u.IMPULSE),
+                dissipated=first.dissipated + dissipated,
+            )
+            return
+        self._rows[key] = len(self.impacts)
         self.impacts.append(
             Impact(
                 time=self.time,
@@ -187,7 +216,7 @@ class ImpactRecorder:
                 normal=(n.x, n.y),
                 granule_energy_gain=(_granule_energy(arbiter.shapes[0].body) - granule_energy)
                 * joule,
-                dissipated=-impulse.dot((before + after) * 0.5) * joule,
+                dissipated=dissipated,
                 hammer_energy_before=hammer.energy,
                 granule_velocity_before=u.vec_to_si(tuple(granule_velocity), u.VELOCITY),
                 hammer_swing_angle_before=hammer.swing_angle,
@@ -196,7 +225,7 @@ class ImpactRecorder:
         )
 
     def _separate(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-        self._pending.pop(self._key(arbiter), None)
+        self._pending.pop(tuple(arbiter.shapes), None)  # type: ignore[arg-type]
 
 
 class Simulation:
@@ -214,7 +243,11 @@ class Simulation:
         self.dt = scene.spec.dt
         self.steps = 0
         self._dt_internal = u.to_internal(self.dt, u.TIME)
-        self.recorder = ImpactRecorder(scene) if record_impacts else None
+        outline = OutlineFilter(scene)  # hammers of several pieces: their outline's contacts
+        if outline:
+            scene.listen("pre_solve", outline.pre_solve, ("granule", "hammer"))
+        filtered = bool(outline)
+        self.recorder = ImpactRecorder(scene, filtered=filtered) if record_impacts else None
         self.meter = EnergyMeter(scene) if track_energy else None
         self._reader: GranuleReader | None = None  # built on the first state read
 
