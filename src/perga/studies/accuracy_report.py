@@ -1,5 +1,5 @@
 """Output of ``perga accuracy``: the table (CSV and Markdown), the recommended settings, and
-one log-log work-precision plot per reference (matplotlib, Agg)."""
+one log-log work-precision plot per reference (matplotlib)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, fields
 from pathlib import Path
 
+from perga.output.figures import new_figure, save
 from perga.studies.accuracy import LEVELS, REFERENCES, Row, StudyResult, recommend
 
 ERROR_FLOOR = 1e-16
@@ -108,12 +109,7 @@ def markdown_report(result: StudyResult) -> str:
 
 def plot_reference(rows: Sequence[Row], reference: str, path: Path) -> None:
     """Log-log error against wall time per simulated second, one line per family."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    fig, ax = new_figure((7.5, 5.0))
     chosen = [r for r in rows if r.reference == reference and r.status == "ok"]
     styles = {"rigid": "o-", "linear": "s--", "hertz": "^:"}
     for family in dict.fromkeys(r.family for r in chosen):
@@ -134,9 +130,7 @@ def plot_reference(rows: Sequence[Row], reference: str, path: Path) -> None:
     ax.set_title(REFERENCES.get(reference, reference), fontsize=10)
     ax.legend(fontsize=7, loc="best")
     ax.grid(True, which="major", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
 
 
 def write_outputs(result: StudyResult, directory: Path) -> list[Path]:

@@ -1,4 +1,4 @@
-"""The ``perga compare`` report: Markdown with PNG figures (matplotlib Agg) and JSON.
+"""The ``perga compare`` report: Markdown with PNG figures (matplotlib, no pyplot) and JSON.
 
 Figures follow the paper's numbering: Fig. 2 (trajectory in the fixed frame, time-coloured),
 Fig. 3 (v_max over ω and f), Fig. 4a (efficiency against hammer mass), Fig. 4b (X, Y, r against
@@ -13,13 +13,10 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
+from perga.output.figures import new_figure, save
 from perga.studies.compare import Analysis, Row
 from perga.studies.paper_check import Params
 
@@ -41,17 +38,23 @@ def _of(analyses: list[Analysis], kind: str) -> list[Analysis]:
     return [a for a in analyses if a.kind == kind]
 
 
-def _trajectories(analyses: list[Analysis]) -> list[Analysis]:
-    return [a for a in analyses if a.kind == "decaying" or "flight_t" in a.series]
+def _trajectory_panels(analyses: list[Analysis], width: float, height: float):
+    """A figure with one panel (width × height inches) per trajectory run (at most two), its
+    axes and the runs; None without such runs."""
+    panels = [a for a in analyses if a.kind == "decaying" or "flight_t" in a.series][:2]
+    if not panels:
+        return None
+    fig, axes = new_figure((width * len(panels), height), 1, len(panels), squeeze=False)
+    return fig, axes[0], panels
 
 
 @figure("2", "Fig. 2: trajectory in the fixed frame, coloured by time")
 def fig2(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
-    panels = _trajectories(analyses)[:2]
-    if not panels:
+    drawing = _trajectory_panels(analyses, 6, 5.2)
+    if drawing is None:
         return False
-    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 5.2), squeeze=False)
-    for ax, a in zip(axes[0], panels, strict=True):
+    fig, axes, panels = drawing
+    for ax, a in zip(axes, panels, strict=True):
         s = a.series
         if a.kind == "decaying":
             t, theta = s["t"], s["theta"]
@@ -71,10 +74,7 @@ def fig2(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         fig.colorbar(sc, ax=ax, label="t, s")
         ax.set(title=a.name, xlabel="X, m", ylabel="Y, m", aspect="equal")
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 @figure("3", "Fig. 3: v_max over ω and f")
@@ -90,7 +90,7 @@ def fig3(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         for row in pts:
             grid[np.searchsorted(fs, row[1]), np.searchsorted(omegas, row[0])] = row[col]
         grids[label] = grid
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.3))
+    fig, axes = new_figure((15, 4.3), 1, 3)
     for ax, (label, grid) in zip(axes, grids.items(), strict=True):
         if np.all(np.isnan(grid)):
             ax.set_axis_off()
@@ -101,10 +101,7 @@ def fig3(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         ax.set(title=label, xlabel="ω, rad/s", ylabel="f")
     err = np.nanmax(np.abs(grids["simulated"] / grids["BladeSlide (consistent)"] - 1))
     fig.suptitle(f"simulated vs consistent model: largest relative difference {err:.1e}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 @figure("4a", "Fig. 4a: efficiency against hammer mass")
@@ -113,7 +110,7 @@ def fig4a(analyses: list[Analysis], paper: Params | None, path: Path) -> bool:
     hinged = [a for a in analyses if a.kind == "hinged" and a.name.startswith("hinged-M")]
     if not two_body and not hinged:
         return False
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = new_figure((7, 5))
     masses = np.geomspace(0.004, 0.25, 100)
     if two_body:
         pts = two_body[0].series["points"]
@@ -142,10 +139,7 @@ def fig4a(analyses: list[Analysis], paper: Params | None, path: Path) -> bool:
         )
     ax.set(xscale="log", yscale="log", xlabel="hammer mass M, g", ylabel="transfer efficiency η")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 def _first(a: Analysis, model: str) -> Row:
@@ -154,11 +148,11 @@ def _first(a: Analysis, model: str) -> Row:
 
 @figure("4b", "Fig. 4b: X, Y and r against time")
 def fig4b(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
-    panels = _trajectories(analyses)[:2]
-    if not panels:
+    drawing = _trajectory_panels(analyses, 6.5, 4.5)
+    if drawing is None:
         return False
-    fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 4.5), squeeze=False)
-    for ax, a in zip(axes[0], panels, strict=True):
+    fig, axes, panels = drawing
+    for ax, a in zip(axes, panels, strict=True):
         s = a.series
         if a.kind == "decaying":
             t, xy = s["t"], s["xy"]
@@ -174,10 +168,7 @@ def fig4b(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         ax.plot(t, np.hypot(xy[:, 0], xy[:, 1]), lw=2, alpha=0.6, label="r simulated")
         ax.set(title=a.name, xlabel="t, s", ylabel="m")
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 @figure("5", "Fig. 5: energy after successive impacts")
@@ -188,7 +179,7 @@ def fig5(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
     a = runs[0]
     en = a.series["energies"]
     n = np.arange(1, len(en.lab) + 1)
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = new_figure((7, 4.5))
     ax.plot(n, en.lab_fraction, "o-", label="simulated: granule KE (lab) after impact")
     ax.plot(n, en.relative_fraction, "s-", label="simulated: ½μv_n'² (hammer frame)")
     ax.plot(n, [1, *a.series["paper_e2i"]], "r^--", label="paper: e^(2(i−1))")
@@ -202,10 +193,7 @@ def fig5(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         xticks=n,
     )
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 @figure("hist", "Impact speeds")
@@ -213,13 +201,10 @@ def histogram(analyses: list[Analysis], _paper: Params | None, path: Path) -> bo
     speeds = [s.approach_speed for a in analyses for s in a.series.get("impacts", [])]
     if not speeds:
         return False
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    fig, ax = new_figure((6.5, 4))
     ax.hist(speeds, bins=min(30, max(5, len(speeds) // 2)))
     ax.set(xlabel="normal approach speed, m/s", ylabel="impacts", title=f"{len(speeds)} impacts")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
+    return save(fig, path)
 
 
 # --- the report ---------------------------------------------------------------------------------

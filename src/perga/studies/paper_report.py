@@ -19,6 +19,7 @@ from perga.analytic.paper import (
     paper_speed,
     paper_trajectory,
 )
+from perga.output.figures import new_figure, save
 from perga.studies.paper_check import (
     ClaimRow,
     Params,
@@ -361,15 +362,10 @@ def write_plots(
     rows: list[ClaimRow], fitted: Params, realistic: Params, directory: Path
 ) -> list[Path]:
     """One PNG per row (``<key>.png``) in ``directory``; returns the paths written."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for row in rows:
-        fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
+        fig, ax = new_figure((7, 4.5), layout="constrained")
         PLOTS[row.key](ax, fitted, realistic)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=7)
@@ -377,7 +373,6 @@ def write_plots(
             f"{row.key}: fitted {row.fitted.verdict}, realistic {row.realistic.verdict}", fontsize=9
         )
         path = directory / f"{row.key}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save(fig, path)
         written.append(path)
     return written
