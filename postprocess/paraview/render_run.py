@@ -1,7 +1,7 @@
 """Open a perga run in ParaView and save a PNG (or an animation): pvbatch/pvpython script.
 
     xvfb-run -a pvbatch postprocess/paraview/render_run.py RUN [--time T] [-o PNG]
-        [--animation DIR] [--gaussian] [--state FILE.pvsm] [--no-bar]
+        [--animation DIR] [--gaussian] [--3d] [--state FILE.pvsm] [--no-bar]
 
 Reads RUN/vtk/ (written by perga.output.vtk): granules drawn at their true size as filled
 circles (``Glyph``, '2D Glyph' circle scaled by ``radius``, ScaleFactor 2 = diameter) coloured
@@ -10,12 +10,26 @@ uses the Point Gaussian representation instead (the interactive choice; under Me
 draws nothing, design notes section 6). ``--state`` saves the scene as a ParaView state file
 for interactive use (File > Load State; "Search files under specified directory" re-targets it
 to another run). Prints the time steps and granule arrays it found.
+
+``--3d`` renders the 3-D view of a run made with ``output.vtk_3d = true`` (perga.output.vtk3d)
+from an oblique camera: hammers (orange) and rotor disc (grey) as lit surfaces extruded to
+their thickness (the disc drawn 2 % thinner than written, so that a disc as thick as the
+hammers does not share their faces), the chamber wall translucent, and the granules as
+cylinders of their ``radius`` and ``thickness`` (a 'Cylinder' glyph turned onto z: ScaleArray
+``radius``, ScaleFactor 2, height thickness/(2·radius) of the unit glyph, so a run of one
+granule size and thickness is drawn exactly; with several, the mean ratio is used and a note
+printed).
 """
 
 import argparse
+import sys
 from pathlib import Path
 
 from paraview import simple as pv
+
+GREY = [0.5, 0.5, 0.5]
+HAMMER_3D = [0.85, 0.45, 0.15]
+ROTOR_3D = [0.6, 0.62, 0.65]
 
 
 def main() -> None:
@@ -25,6 +39,9 @@ def main() -> None:
     parser.add_argument("-o", "--output", type=Path, help="PNG (default RUN/paraview.png)")
     parser.add_argument("--animation", type=Path, help="also save every frame into this folder")
     parser.add_argument("--gaussian", action="store_true", help="Point Gaussian granules")
+    parser.add_argument(
+        "--3d", dest="three_d", action="store_true", help="the 3-D view (output.vtk_3d runs)"
+    )
     parser.add_argument("--no-bar", action="store_true", help="no colour bar")
     parser.add_argument(
         "--state", type=Path, help="also save a ParaView state file (.pvsm) of this scene"
@@ -33,8 +50,10 @@ def main() -> None:
     args = parser.parse_args()
     vtk = args.run / "vtk"
 
+    if args.three_d and not (vtk / "machine3d.pvd").exists():
+        sys.exit(f"{vtk / 'machine3d.pvd'} is missing: run the case with output.vtk_3d = true")
     granules = pv.PVDReader(FileName=str(vtk / "granules.pvd"))
-    machine = pv.PVDReader(FileName=str(vtk / "machine.pvd"))
+    machine = pv.PVDReader(FileName=str(vtk / ("machine3d.pvd" if args.three_d else "machine.pvd")))
     times = list(granules.TimestepValues)
     arrays = sorted(granules.PointData.keys())
     print(f"time steps: {len(times)} ({times[0]:.6g} .. {times[-1]:.6g} s)")
@@ -45,7 +64,9 @@ def main() -> None:
     view.UseColorPaletteForBackground = 0
     view.Background = [1.0, 1.0, 1.0]
     view.OrientationAxesVisibility = 0
-    if args.gaussian:
+    if args.three_d:
+        shown = pv.Show(cylinders(granules), view)
+    elif args.gaussian:
         shown = pv.Show(granules, view)
         shown.SetRepresentationType("Point Gaussian")
         shown.ShaderPreset = "Plain circle"
@@ -67,28 +88,48 @@ def main() -> None:
     bar = pv.GetScalarBar(lut, view)
     bar.Title, bar.ComponentTitle = "speed, m/s", ""
     bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
-    # hammers (cell id >= 0) as grey surfaces; the rotor disc (id -1), under the granules, as
-    # its outline only
-    for lower, upper, style in ((0.0, 1e9, "Surface"), (-1.0, -1.0, "Wireframe")):
+    bar.Visibility = int(not args.no_bar)
+    # 2-D: hammers (cell id >= 0) as grey surfaces; the rotor disc (id -1), under the granules,
+    # as its outline only. 3-D: both solid, hammers orange (told apart from the viridis
+    # granules and the grey disc)
+    parts = (
+        ((0.0, 1e9, "Surface", HAMMER_3D), (-1.0, -1.0, "Surface", ROTOR_3D))
+        if args.three_d
+        else ((0.0, 1e9, "Surface", GREY), (-1.0, -1.0, "Wireframe", GREY))
+    )
+    for lower, upper, style, colour in parts:
         part = pv.Threshold(Input=machine, Scalars=["CELLS", "id"])
         part.LowerThreshold, part.UpperThreshold = lower, upper
         machine_shown = pv.Show(part, view)
         machine_shown.SetRepresentationType(style)
         machine_shown.ColorArrayName = ["POINTS", ""]
-        machine_shown.AmbientColor = machine_shown.DiffuseColor = [0.5, 0.5, 0.5]
-    chamber_file = vtk / "chamber.vtu"
+        machine_shown.AmbientColor = machine_shown.DiffuseColor = colour
+        if args.three_d and lower < 0:
+            # a disc as thick as the hammers shares their faces: drawn 2 % thinner (display
+            # only), the hammers' faces are the ones seen
+            machine_shown.Scale = [1.0, 1.0, 0.98]
+    chamber_file = vtk / ("chamber3d.vtu" if args.three_d else "chamber.vtu")
     if chamber_file.exists():
         chamber = pv.Show(pv.XMLUnstructuredGridReader(FileName=[str(chamber_file)]), view)
         chamber.ColorArrayName = ["POINTS", ""]
         chamber.AmbientColor = chamber.DiffuseColor = [0.2, 0.2, 0.2]
         chamber.LineWidth = 2.0
+        if args.three_d:
+            chamber.Opacity = 0.3
 
     scene = pv.GetAnimationScene()
     scene.UpdateAnimationUsingDataTimeSteps()
     time = times[-1] if args.time is None else min(times, key=lambda t: abs(t - args.time))
     scene.AnimationTime = time
     shown.RescaleTransferFunctionToDataRange(False, True)
-    view.InteractionMode = "2D"
+    if args.three_d:
+        # oblique: from below the rotor's -y side, 50° above the plane, z up on the screen
+        view.InteractionMode = "3D"
+        view.CameraFocalPoint = [0.0, 0.0, 0.0]
+        view.CameraPosition = [0.0, -0.64, 0.77]
+        view.CameraViewUp = [0.0, 0.0, 1.0]
+    else:
+        view.InteractionMode = "2D"
     view.ResetCamera()
     output = args.output or args.run / "paraview.png"
     pv.SaveScreenshot(str(output), view, ImageResolution=list(args.size))
@@ -100,6 +141,26 @@ def main() -> None:
         args.animation.mkdir(parents=True, exist_ok=True)
         pv.SaveAnimation(str(args.animation / "frame.png"), view, ImageResolution=list(args.size))
         print(f"wrote the animation frames into {args.animation}")
+
+
+def cylinders(granules):
+    """The granules as cylinders (z axis) of their radius and thickness, from the points."""
+    data = granules.PointData
+    if "thickness" not in list(data.keys()):
+        sys.exit("the granule frames have no 'thickness': run the case with output.vtk_3d = true")
+    t_low, t_high = data["thickness"].GetRange()
+    r_low, r_high = data["radius"].GetRange()
+    if t_high - t_low > 1e-9 * t_high or r_high - r_low > 1e-9 * r_high:
+        print("note: granules of several sizes: cylinders drawn with the mean thickness/radius")
+    glyph = pv.Glyph(Input=granules, GlyphType="Cylinder")
+    glyph.GlyphType.Resolution = 24
+    # the unit cylinder (radius 0.5, axis y) scaled by 2·radius: height = 2·radius·Height
+    glyph.GlyphType.Height = 0.5 * (t_low + t_high) / (r_low + r_high)
+    glyph.GlyphTransform.Rotate = [90.0, 0.0, 0.0]  # axis y -> z
+    glyph.ScaleArray = ["POINTS", "radius"]
+    glyph.ScaleFactor = 2.0
+    glyph.GlyphMode = "All Points"
+    return glyph
 
 
 if __name__ == "__main__":

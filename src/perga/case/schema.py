@@ -463,6 +463,19 @@ class Output(Strict):
         description="what to write: CSV tables (granules, hammers, impacts, energy) and 'vtk' "
         "(ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
     )
+    vtk_3d: bool = Field(
+        False,
+        description="with 'vtk': also the 3-D view, RUN/vtk/machine3d.pvd and chamber3d.vtu: "
+        "hammers and rotor disc extruded to their thickness, m (hammers: the plate's or the "
+        "geometry's; rotor: its mesh's height, else the hammers'), centred on the rotor plane "
+        "z = 0, and the chamber wall as tall as the tallest part (see perga.output.vtk3d)",
+    )
+
+    @model_validator(mode="after")
+    def _vtk_3d_needs_vtk(self) -> Output:
+        if self.vtk_3d and "vtk" not in self.record:
+            raise ValueError("vtk_3d = true needs 'vtk' in record")
+        return self
 
 
 class Case(Strict):

@@ -5,7 +5,8 @@ rectangle, or a geometry file), in the hammer frame (hinge at the origin, axis +
 evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
 (:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
 listed in the case, and only those, become the scene's effects; a soft contact model gets its
-stiffness and steps from :mod:`perga.case.timestep`.
+stiffness and steps from :mod:`perga.case.timestep`; ``output.vtk_3d`` adds the parts'
+thicknesses for the 3-D view of the output (:class:`~perga.engine.spec.DrawingSpec`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from perga.engine.spec import (
     AirDragSpec,
     ChamberSpec,
     ContactSpec,
+    DrawingSpec,
     DriveSpec,
     EffectsSpec,
     FloorFrictionSpec,
@@ -115,6 +117,24 @@ def _chamber(case: Case) -> ChamberSpec:
     return ChamberSpec(g.inner_radius, c.wall_thickness, c.material, outline=outline)
 
 
+def _drawing(case: Case) -> DrawingSpec | None:
+    """The 3-D view's sizes with ``output.vtk_3d`` (None without): every hammer the geometry's
+    thickness, the rotor its mesh's height (else the hammers'), the chamber wall as tall as the
+    tallest part, the granules ``case.granule_thickness``; m."""
+    if not case.output.vtk_3d:
+        return None
+    hammer = hammer_geometry(case).thickness
+    disc = rotor_geometry(case)
+    rotor = disc.thickness if disc is not None and disc.thickness is not None else hammer
+    granule = case.granule_thickness
+    return DrawingSpec(
+        hammer_thickness=(hammer,) * len(hammer_angles(case)),
+        rotor_thickness=rotor,
+        chamber_height=max(hammer, rotor, granule),
+        granule_thickness=granule,
+    )
+
+
 def scene_spec(case: Case) -> SceneSpec:
     """The engine's description of a validated case (raises ValueError without a placement or
     a chamber: a simulation needs both)."""
@@ -144,4 +164,5 @@ def scene_spec(case: Case) -> SceneSpec:
         chamber=_chamber(case),
         effects=_effects(case),
         soft=_soft(case),
+        drawing=_drawing(case),
     )

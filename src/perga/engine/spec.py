@@ -367,6 +367,31 @@ class SoftContactSpec:
 
 
 @dataclass(frozen=True)
+class DrawingSpec:
+    """Out-of-plane sizes of the parts for the 3-D view of the output (:mod:`perga.output.
+    vtk3d`), m; never used by the engine. Carried by the scene spec because the recorders see
+    the simulation only: a ``SceneSpec`` with a drawing is what asks for the 3-D view.
+
+    hammer_thickness: one per hammer; rotor_thickness: the disc's; chamber_height: the wall's;
+    granule_thickness: every granule's (drawn as cylinders).
+    """
+
+    hammer_thickness: tuple[float, ...]
+    rotor_thickness: float
+    chamber_height: float
+    granule_thickness: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "hammer_thickness", tuple(map(float, self.hammer_thickness)))
+        problems: list[str] = []
+        for k, t in enumerate(self.hammer_thickness):
+            _positive(problems, f"hammer_thickness[{k}]", t, "m")
+        for name in ("rotor_thickness", "chamber_height", "granule_thickness"):
+            _positive(problems, name, getattr(self, name), "m")
+        _raise("drawing", problems)
+
+
+@dataclass(frozen=True)
 class SceneSpec:
     """Everything the engine builds a scene from.
 
@@ -374,7 +399,8 @@ class SceneSpec:
     dt·soft.substeps); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
     gravity, m/s² (zero for a horizontal rotor); granule_collisions: whether granules collide
     with each other; chamber: the round wall, or None; effects: optional physics; soft: soft
-    granule contacts (:class:`SoftContactSpec`), or None for Pymunk's impulses. Every
+    granule contacts (:class:`SoftContactSpec`), or None for Pymunk's impulses; drawing: sizes
+    for the 3-D view of the output (:class:`DrawingSpec`), or None for none. Every
     material pair that can touch must be in ``contacts`` exactly once. Hammers never collide
     with each other, with the rotor or with the chamber wall.
     """
@@ -390,6 +416,7 @@ class SceneSpec:
     chamber: ChamberSpec | None = None
     effects: EffectsSpec = EffectsSpec()
     soft: SoftContactSpec | None = None
+    drawing: DrawingSpec | None = None
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -412,6 +439,11 @@ class SceneSpec:
                 problems.append(f"no contact parameters for materials {sorted(pair)}")
         for pair in sorted(set(table) - self.touching_pairs(), key=sorted):
             problems.append(f"contact pair {sorted(pair)} is unused by this scene")
+        if self.drawing is not None and len(self.drawing.hammer_thickness) != len(self.hammers):
+            problems.append(
+                f"drawing.hammer_thickness has {len(self.drawing.hammer_thickness)} values for "
+                f"{len(self.hammers)} hammers"
+            )
         _raise("scene", problems)
         object.__setattr__(self, "_table", table)
 

@@ -20,11 +20,20 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
 * ``chamber.vtu``: the wall's inner outline (from the chamber's file, or its circle as 256
   segments) as one closed VTK_POLY_LINE, written at the first frame (absent without a chamber).
 * ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule through its recorded frame
-  positions; point data ``time`` (s) and ``speed`` (m/s), cell data ``id``.
+  positions; point data ``time`` (s) and ``speed`` (m/s), cell data ``id``. Each frame's time,
+  positions and speeds are appended to the scratch file ``.trajectories.f8`` (raw float64,
+  flushed every frame) rather than kept in memory, so the recorder holds O(granules) whatever
+  the number of frames; ``close`` (called by the runner whatever ended the run) builds the file
+  from it, in blocks of frames, and deletes it. Building needs the file's arrays in memory
+  once (~56 B per granule and frame).
 * ``impacts.vtu`` (at ``close``): a VTK_VERTEX per granule-hammer impact at its contact point;
   point data ``time`` (s), ``granule``, ``hammer``, ``normal_impulse`` (N·s),
   ``granule_energy_gain`` (J), ``dissipated`` (J), ``normal`` (3 components). With no impacts
   the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty arrays).
+
+With ``output.vtk_3d`` (a :class:`~perga.engine.spec.DrawingSpec` in the scene spec) also
+``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
+frames: see :mod:`perga.output.vtk3d`.
 
 Each ``.pvd`` is rewritten atomically (temporary file, then ``os.replace``) after every frame,
 so a run stopped at any point leaves valid collections of the frames written so far.
@@ -36,6 +45,7 @@ import itertools
 import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 import pymunk
@@ -45,13 +55,17 @@ from numpy.typing import NDArray
 from perga.engine import units as u
 from perga.engine.simulation import FloatArray, Simulation
 from perga.engine.soft_simulation import SoftSimulation
+from perga.engine.spec import RotorSpec
 from perga.geometry.polygon import outline_or_circle
+from perga.output import vtk3d
 from perga.soft import polygons as pg
 
 ROTOR_SIDES = 64
 """Sides of the polygon drawn for the rotor disc."""
 CHAMBER_SEGMENTS = 256
 """Segments of the polyline drawn for the chamber's inner circle."""
+TRAJECTORY_BLOCK = 1 << 22
+"""Values (float64) of the trajectory scratch read at a time by ``close``: 32 MiB."""
 
 
 class PvdSeries:
@@ -145,9 +159,11 @@ class VtkRecorder:
         self.directory.mkdir(parents=True, exist_ok=True)
         self.granules = PvdSeries(self.directory, "granules")
         self.machine = PvdSeries(self.directory, "machine")
-        self.times: list[float] = []
-        self.positions: list[FloatArray] = []
-        self.speeds: list[FloatArray] = []
+        self.machine3d: PvdSeries | None = None
+        self._machine3d: vtk3d.Machine3D | None = None
+        self.frames = 0
+        self.scratch = self.directory / ".trajectories.f8"
+        self._scratch: BinaryIO | None = None
         self._sim: Simulation | None = None
         self._radius = self._mass = self._moment = np.empty(0)
         self._material = np.empty(0, dtype=np.int32)
@@ -164,6 +180,7 @@ class VtkRecorder:
         self._moment = np.array([g.moment if g.rolls else 0.0 for g in spec.granules])
         self._material = np.array([names.index(g.material) for g in spec.granules], dtype=np.int32)
         self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)
+        self._scratch = open(self.scratch, "wb")  # noqa: SIM115 (closed by close())
         self.granules.comment = "material: " + ", ".join(
             f"{k} = {name}" for k, name in enumerate(names)
         )
@@ -173,6 +190,28 @@ class VtkRecorder:
             ring = np.append(np.arange(len(wall)), 0)
             chamber = _grid([ring], pv.CellType.POLY_LINE, wall)
             chamber.save(self.directory / "chamber.vtu", binary=True, compression="zlib")
+        if spec.drawing is not None:
+            self._start_3d(sim)
+
+    def _start_3d(self, sim: Simulation) -> None:
+        """The extruded parts, the ``machine3d`` series and ``chamber3d.vtu``."""
+        scene, spec = sim.scene, sim.scene.spec
+        drawing = spec.drawing
+        assert drawing is not None
+        outlines = [np.asarray(o, dtype=float) * u.LENGTH for o in scene.hammer_outlines]
+        outlines.append(_disc(spec.rotor))
+        self._machine3d = vtk3d.Machine3D(
+            [*scene.hammer_bodies, scene.rotor],
+            outlines,
+            [*drawing.hammer_thickness, drawing.rotor_thickness],
+        )
+        self.machine3d = PvdSeries(self.directory, "machine3d")
+        if spec.chamber is not None:
+            c = spec.chamber
+            inner = outline_or_circle(c.outline, c.radius, CHAMBER_SEGMENTS)
+            part = vtk3d.wall(inner, c.wall_thickness, drawing.chamber_height)
+            chamber = vtk3d.part_grid(part)
+            chamber.save(self.directory / "chamber3d.vtu", binary=True, compression="zlib")
 
     def record(self, sim: Simulation) -> None:
         """Write the granule and machine frames at ``sim.time`` and update both ``.pvd``."""
@@ -203,27 +242,67 @@ class VtkRecorder:
         data["impacts"] = self._impact_count
         if isinstance(sim, SoftSimulation):
             data["contacts"], data["overlap_max"] = soft_contacts(sim)
+        drawing = sim.scene.spec.drawing
+        if drawing is not None:
+            data["thickness"] = np.full(len(p), drawing.granule_thickness)
         self.granules.add(t, mesh)
-        self.machine.add(t, machine_mesh(sim))
-        self.times.append(t)
-        self.positions.append(p)
-        self.speeds.append(speed)
+        cell_data = machine_cell_data(sim)
+        self.machine.add(t, machine_mesh(sim, cell_data))
+        if self.machine3d is not None and self._machine3d is not None:
+            self.machine3d.add(t, self._machine3d.mesh(cell_data))
+        row = np.empty((len(p), 3))
+        row[:, :2], row[:, 2] = p, speed
+        assert self._scratch is not None
+        self._scratch.write(np.float64(t).tobytes())
+        self._scratch.write(row.tobytes())
+        self._scratch.flush()
+        self.frames += 1
 
     def close(self) -> None:
         """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded)."""
         if self._closed or self._sim is None:
             return
         self._closed = True
-        frames, n = len(self.times), len(self.positions[0])
-        track = np.stack(self.positions, axis=1).reshape(-1, 2)  # granule-major
-        cells = [np.arange(k * frames, (k + 1) * frames, dtype=np.int64) for k in range(n)]
-        trajectories = _grid(cells, pv.CellType.POLY_LINE, track)
-        trajectories.point_data["time"] = np.tile(np.array(self.times), n)
-        trajectories.point_data["speed"] = np.stack(self.speeds, axis=1).ravel()
+        try:
+            self._write_trajectories()
+        finally:
+            self.scratch.unlink(missing_ok=True)
+        self._write_impacts(self._sim)
+
+    def _write_trajectories(self) -> None:
+        """``trajectories.vtu`` from the scratch file (frame-major) read in blocks of frames."""
+        assert self._scratch is not None
+        self._scratch.close()
+        frames, n = self.frames, len(self._radius)
+        scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=(frames, 1 + 3 * n))
+        points = np.zeros((n, frames, 3))  # granule-major
+        speed = np.empty((n, frames))
+        block = max(1, TRAJECTORY_BLOCK // (1 + 3 * n))
+        for a in range(0, frames, block):
+            rows = np.asarray(scratch[a : a + block, 1:])
+            rows = rows.reshape(len(rows), n, 3)
+            points[:, a : a + len(rows), :2] = rows[:, :, :2].transpose(1, 0, 2)
+            speed[:, a : a + len(rows)] = rows[:, :, 2].T
+        times = np.array(scratch[:, 0])
+        del scratch
+        cells = np.empty((n, frames + 1), dtype=np.int64)
+        cells[:, 0] = frames
+        cells[:, 1:] = np.arange(n * frames, dtype=np.int64).reshape(n, frames)
+        trajectories = pv.UnstructuredGrid(
+            cells.ravel(),
+            np.full(n, pv.CellType.POLY_LINE, dtype=np.uint8),
+            points.reshape(-1, 3),
+            deep=False,
+        )
+        del cells
+        trajectories.point_data["time"] = np.tile(times, n)
+        trajectories.point_data["speed"] = speed.reshape(-1)
         trajectories.cell_data["id"] = np.arange(n, dtype=np.int64)
         trajectories.save(self.directory / "trajectories.vtu", binary=True, compression="zlib")
 
-        impacts = self._sim.impacts
+    def _write_impacts(self, sim: Simulation) -> None:
+        """``impacts.vtu``: every granule-hammer impact of the run."""
+        impacts = sim.impacts
         points = np.array([i.point for i in impacts], dtype=float).reshape(-1, 2)
         mesh = _vertices(len(impacts), points)
         columns: dict[str, np.ndarray] = {
@@ -239,33 +318,49 @@ class VtkRecorder:
         mesh.save(self.directory / "impacts.vtu", binary=True, compression="zlib")
 
 
-def machine_mesh(sim: Simulation) -> pv.UnstructuredGrid:
-    """The hammers posed now, then the rotor disc, as polygons with the cell data listed in the
-    module doc."""
+def _disc(rotor: RotorSpec) -> FloatArray:
+    """The rotor disc's outline in the rotor's frame, m (a ``ROTOR_SIDES``-gon without one)."""
+    return outline_or_circle(rotor.outline, rotor.radius, ROTOR_SIDES)
+
+
+def machine_cell_data(sim: Simulation) -> dict[str, NDArray]:
+    """Per part now, the hammers then the rotor: the cell data listed in the module doc."""
     scene = sim.scene
     hinges = {j.b: j for j in scene.joints if isinstance(j, pymunk.PivotJoint)}
-    outlines: list[FloatArray] = []
-    force: list[float] = []
-    for body, outline in zip(scene.hammer_bodies, scene.hammer_outlines, strict=True):
-        outlines.append(np.array([tuple(body.local_to_world(v)) for v in outline]) * u.LENGTH)
-        joint = hinges.get(body)
-        force.append(0.0 if joint is None else joint.impulse * u.IMPULSE / sim.dt)
+    force = [
+        0.0 if (joint := hinges.get(body)) is None else joint.impulse * u.IMPULSE / sim.dt
+        for body in scene.hammer_bodies
+    ]
+    alpha = sim.hammer_swing_angles()
+    mounts = np.array([h.angle_on_rotor for h in scene.spec.hammers], dtype=float)
+    theta = sim.rotor_angle()
+    return {
+        "id": np.append(np.arange(len(alpha), dtype=np.int64), -1),
+        "swing_angle": np.append(alpha, 0.0),
+        "angle": np.append(theta + mounts + alpha, theta),
+        "angular_velocity": np.append(
+            sim.hammer_angular_velocities(), sim.rotor_angular_velocity()
+        ),
+        "hinge_force": np.append(force, 0.0),
+    }
+
+
+def machine_mesh(
+    sim: Simulation, cell_data: dict[str, NDArray] | None = None
+) -> pv.UnstructuredGrid:
+    """The hammers posed now, then the rotor disc, as polygons with the cell data listed in the
+    module doc (``cell_data``: :func:`machine_cell_data`, computed if not given)."""
+    scene = sim.scene
+    outlines: list[FloatArray] = [
+        np.array([tuple(body.local_to_world(v)) for v in outline]) * u.LENGTH
+        for body, outline in zip(scene.hammer_bodies, scene.hammer_outlines, strict=True)
+    ]
     rotor = scene.rotor
-    r = scene.spec.rotor
-    disc = outline_or_circle(r.outline, r.radius, ROTOR_SIDES) / u.LENGTH
+    disc = _disc(scene.spec.rotor) / u.LENGTH
     outlines.append(np.array([tuple(rotor.local_to_world(tuple(v))) for v in disc]) * u.LENGTH)
     ends = np.cumsum([0] + [len(o) for o in outlines])
     cells = [np.arange(a, b, dtype=np.int64) for a, b in itertools.pairwise(ends)]
     mesh = _grid(cells, pv.CellType.POLYGON, np.concatenate(outlines))
-    alpha = sim.hammer_swing_angles()
-    mounts = np.array([h.angle_on_rotor for h in scene.spec.hammers], dtype=float)
-    theta = sim.rotor_angle()
-    data = mesh.cell_data
-    data["id"] = np.append(np.arange(len(alpha), dtype=np.int64), -1)
-    data["swing_angle"] = np.append(alpha, 0.0)
-    data["angle"] = np.append(theta + mounts + alpha, theta)
-    data["angular_velocity"] = np.append(
-        sim.hammer_angular_velocities(), sim.rotor_angular_velocity()
-    )
-    data["hinge_force"] = np.append(force, 0.0)
+    for name, values in (cell_data or machine_cell_data(sim)).items():
+        mesh.cell_data[name] = values
     return mesh
