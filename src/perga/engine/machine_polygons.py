@@ -27,9 +27,8 @@ import numpy as np
 import pymunk
 
 from perga.engine import units as u
-from perga.engine.scene import Scene
+from perga.engine.scene import Scene, chamber_inner_outline, chamber_pieces
 from perga.geometry.polygon import counter_clockwise
-from perga.geometry.wall import wall_pieces
 from perga.soft.polygons import FREE, KINEMATIC, PINNED, PolygonSet, piece_features, polygon_set
 
 TORQUE = u.FORCE * u.LENGTH
@@ -86,8 +85,8 @@ class MachinePolygons:
         n_hammer = len(relative)
         materials = [self.materials.index(specs[k].material) for k in owner]
         if walled:
-            pieces, outer = wall_pieces(np.array(chamber.outline), chamber.wall_thickness)
-            loops = [outer, np.array(chamber.outline)[::-1]]
+            pieces, outer = chamber_pieces(chamber)
+            loops = [outer, chamber_inner_outline(chamber)[::-1]]
             features = piece_features(pieces, loops)
             offset = len(self._relative)
             solid.append(features[0])

@@ -366,15 +366,15 @@ def chamber_inner_outline(chamber: ChamberSpec) -> np.ndarray:
     return circumscribed(chamber.radius, chamber.segments)
 
 
-def chamber_pieces(chamber: ChamberSpec) -> list[np.ndarray]:
-    """The wall's convex pieces, m (:func:`perga.geometry.wall.wall_pieces`)."""
-    pieces, _ = wall_pieces(chamber_inner_outline(chamber), chamber.wall_thickness)
-    return pieces
+def chamber_pieces(chamber: ChamberSpec) -> tuple[list[np.ndarray], np.ndarray]:
+    """The wall's convex pieces and its outer outline, m
+    (:func:`perga.geometry.wall.wall_pieces`)."""
+    return wall_pieces(chamber_inner_outline(chamber), chamber.wall_thickness)
 
 
 def _build_chamber(chamber: ChamberSpec, static: pymunk.Body) -> list[pymunk.Poly]:
     """One quadrilateral per edge of the wall's inner outline, ``wall_thickness`` thick."""
     return [
         pymunk.Poly(static, [u.vec_to_internal(tuple(v), u.LENGTH) for v in piece])
-        for piece in chamber_pieces(chamber)
+        for piece in chamber_pieces(chamber)[0]
     ]
