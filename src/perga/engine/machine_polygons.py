@@ -67,7 +67,7 @@ class MachinePolygons:
             features = piece_features(pieces, [counter_clockwise(outline)])
             offset = sum(len(r) for r in relative)
             solid.append(features[0])
-            corner.append(np.where(features[1] >= 0, features[1] + offset, -1))
+            corner.append(_shifted(features[1], offset))
             relative += pieces
             owner += [index] * len(pieces)
             if h.mount == "hinged":
@@ -90,7 +90,7 @@ class MachinePolygons:
             features = piece_features(pieces, loops)
             offset = len(self._relative)
             solid.append(features[0])
-            corner.append(np.where(features[1] >= 0, features[1] + offset, -1))
+            corner.append(_shifted(features[1], offset))
             relative += pieces
             owner += [-1] * len(pieces)
             kinds += [KINEMATIC] * len(pieces)
@@ -161,3 +161,12 @@ class MachinePolygons:
             body.force = (fx / u.FORCE, fy / u.FORCE)
             body.torque = torque / TORQUE
         return float(np.sum(p.moment[self.machine]))
+
+
+def _shifted(corner: np.ndarray, offset: int) -> np.ndarray:
+    """``piece_features``' corner rows with their vertex indices (the first two columns, −1 for
+    none) moved by ``offset``, for a body whose pieces follow ``offset`` vertices in the set."""
+    out = corner.copy()
+    ends = out[:, :2]
+    ends[ends >= 0] += offset
+    return out

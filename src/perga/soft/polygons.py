@@ -484,9 +484,9 @@ def _past_joint(px, py, verts, corner, q):
     iy = vy - verts[corner[q, 0], 1]
     ox = verts[corner[q, 1], 0] - vx
     oy = verts[corner[q, 1], 1] - vy
-    li = math.sqrt(ix * ix + iy * iy)
-    lo = math.sqrt(ox * ox + oy * oy)
-    return (px - vx) * (ix / li + ox / lo) + (py - vy) * (iy / li + oy / lo)
+    l_in = math.sqrt(ix * ix + iy * iy)
+    l_out = math.sqrt(ox * ox + oy * oy)
+    return (px - vx) * (ix / l_in + ox / l_out) + (py - vy) * (iy / l_in + oy / l_out)
 
 
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
