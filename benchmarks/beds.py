@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from perga.analytic.contact import LinearSpringDashpot, damping_ratio
-from perga.soft import SoftGranules, contact_parameters, plane, uniform_table
+from perga.contact.soft import SoftGranules, contact_parameters, plane, uniform_table
 
 RADIUS = 2e-3  # m
 DENSITY = 1400.0  # kg/m³

@@ -17,7 +17,7 @@ hammers  a round chamber (R = 0.19 m) with 6 plate hammers 80 x 6 mm welded to a
 
 Engines:
 
-perga soft    ``perga.soft.SoftGranules`` (numba kernel), 1 and 2 threads;
+perga soft    ``perga.contact.soft.SoftGranules`` (numba kernel), 1 and 2 threads;
 LAMMPS        Debian's ``lmp`` (29 Sep 2021), ``pair_style gran/hooke/history ... limit_damping``
               with γ_n = 2ζ√(k_n/m_eff) for the pair m_eff = m/2, walls ``fix wall/gran
               granular hooke ... damping velocity limit_damping`` (η_n = 2ζ√(k_n m)), ``fix
@@ -75,6 +75,8 @@ from scipy.spatial import cKDTree
 
 from perga.analytic.contact import damping_ratio
 from perga.case import load_case
+from perga.contact.soft import SoftGranules, plane, uniform_table
+from perga.contact.soft.neighbours import build as build_neighbours
 from perga.engine import (
     ChamberSpec,
     ContactSpec,
@@ -85,12 +87,10 @@ from perga.engine import (
     Simulation,
     build_scene,
 )
-from perga.engine.from_case import scene_spec
-from perga.soft import SoftGranules, plane, uniform_table
-from perga.soft.neighbours import build as build_neighbours
+from perga.model.from_case import scene_spec
 
 try:  # soft granules with Pymunk hammers (perga run's [contact_model])
-    from perga.engine.soft_simulation import SoftSimulation
+    from perga.contact.soft.model import SoftSimulation
 except ImportError:  # not yet wired
     SoftSimulation = None
 

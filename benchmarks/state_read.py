@@ -1,4 +1,4 @@
-"""Cost of reading granule state: ``perga.engine.state.GranuleReader`` (pymunk.batch) against the
+"""Cost of reading granule state: ``perga.contact.rigid.batch.GranuleReader`` (pymunk.batch) against the
 per-body Python loop of ``Simulation.granule_positions`` & co.
 
 Scene: the one of ``engine_vs_pymunk.py`` (rotor, 6 hinged hammers, chamber), after 20 steps so
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from perga.contact.rigid.batch import GranuleReader
 from perga.engine import Simulation, build_scene
-from perga.engine.state import GranuleReader
 
 sys.path.insert(0, str(Path(__file__).parent))
 from engine_vs_pymunk import perga_spec

@@ -28,7 +28,7 @@ from perga.analytic.impact import (
 from perga.analytic.sliding import BladeSlide, frictionless_exit
 from perga.case import Case, load_case
 from perga.engine import Simulation, build_scene
-from perga.engine.from_case import scene_spec
+from perga.model.from_case import scene_spec
 
 CASES = Path(__file__).resolve().parent / "cases" / "closed-form"
 REQUIRED = 1e-3  # the requirement: relative error <= 1e-3 at the bundled time steps

@@ -25,10 +25,10 @@ import numpy as np
 from perga.case.parts import chamber_geometry
 from perga.case.schema import Case
 from perga.case.timestep import step_plan
-from perga.engine.from_case import scene_spec
-from perga.engine.scene import build_scene
+from perga.contact.soft.model import SoftSimulation
+from perga.engine.machine import build_scene
 from perga.engine.simulation import Simulation
-from perga.engine.soft_simulation import SoftSimulation
+from perga.model.from_case import scene_spec
 from perga.output.recorders import RECORDERS, PhaseLock, Recorder
 
 

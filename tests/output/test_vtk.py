@@ -19,14 +19,14 @@ import pytest
 import pyvista as pv
 
 from perga.case import load_case
+from perga.contact.soft import polygons as pg
+from perga.contact.soft.model import SoftSimulation
 from perga.engine import ContactSpec, Simulation, build_scene
 from perga.engine import units as u
-from perga.engine.from_case import scene_spec
-from perga.engine.soft_simulation import SoftSimulation
-from perga.engine.spec import SceneSpec
+from perga.model.from_case import scene_spec
+from perga.model.spec import SceneSpec
 from perga.output.vtk import CHAMBER_SEGMENTS, ROTOR_SIDES, PvdSeries, VtkRecorder, _grid
 from perga.runner import prepare_directory, run_case
-from perga.soft import polygons as pg
 
 CASES = Path(__file__).parents[2] / "cases"
 FRAMES = 12

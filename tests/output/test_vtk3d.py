@@ -26,10 +26,10 @@ from perga.case.parts import rotor_geometry
 from perga.case.schema import Case
 from perga.cli import main
 from perga.engine import Simulation, build_scene
-from perga.engine.from_case import scene_spec
-from perga.engine.spec import DrawingSpec
 from perga.geometry.polygon import outline_or_circle, signed_area
 from perga.geometry.wall import wall_pieces
+from perga.model.from_case import scene_spec
+from perga.model.spec import DrawingSpec
 from perga.output.vtk import CHAMBER_SEGMENTS, ROTOR_SIDES, VtkRecorder
 from tests.output.test_vtk import Frame, both, read_pvd, snapshot
 

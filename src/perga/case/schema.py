@@ -395,7 +395,7 @@ class ContactModel(Strict):
 
     'rigid': Pymunk impulses (instantaneous, restitution and friction exact per impact);
     'linear' or 'hertz': soft spring-dashpot contacts of finite duration integrated by perga's
-    kernel (:mod:`perga.soft`), damping tuned to each pair's restitution, Cundall-Strack
+    kernel (:mod:`perga.contact.soft`), damping tuned to each pair's restitution, Cundall-Strack
     tangential spring capped by the pair's friction.
     """
 

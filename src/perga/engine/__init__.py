@@ -3,9 +3,9 @@ optional physics from :mod:`.effects`) -> Simulation (stepping, impact recording
 from :mod:`.energy`, state in SI, :mod:`.simulation`)."""
 
 from perga.engine.energy import EnergyLedger
-from perga.engine.scene import Scene, build_scene
+from perga.engine.machine import Scene, build_scene
 from perga.engine.simulation import Impact, ImpactRecorder, Simulation
-from perga.engine.spec import (
+from perga.model.spec import (
     AirDragSpec,
     ChamberSpec,
     ContactSpec,

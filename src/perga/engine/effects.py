@@ -1,11 +1,11 @@
-"""Optional physics, built by :func:`~perga.engine.scene.build_scene` only when the spec lists
+"""Optional physics, built by :func:`~perga.engine.machine.build_scene` only when the spec lists
 it (design §3): an absent effect leaves no per-step hook, constraint or callback.
 
-Each effect is a class registered under its :class:`~perga.engine.spec.EffectsSpec` field name.
+Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpec` field name.
 Effects that act on granule velocities (floor friction, air drag) are *kicks*: array operations
 on all granules at once, with no per-granule Python. Once per step, **before** Chipmunk's
 ``space.step`` (:meth:`Effect.before_step`, called by :meth:`~perga.engine.simulation.
-Simulation.step`), one :class:`~perga.engine.state.GranuleWriter` reads every granule's velocity
+Simulation.step`), one :class:`~perga.contact.rigid.batch.GranuleWriter` reads every granule's velocity
 (and position, for the co-rotating floor) in one ``pymunk.batch`` pass, every listed kick
 changes the velocity arrays in registry order, each a velocity change over dt that never
 reverses the velocity it opposes, and one batch write sets them (every other body keeps its
@@ -44,12 +44,12 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
+from perga.contact.rigid.batch import GranuleWriter
 from perga.engine import units as u
-from perga.engine.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
-from perga.engine.state import GranuleWriter
+from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
-    from perga.engine.scene import Scene
+    from perga.engine.machine import Scene
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
@@ -329,7 +329,7 @@ class AirDrag(Kick):
 def build_effects(scene: Scene) -> list[Effect]:
     """Build the effects ``scene.spec.effects`` lists, in registry order; if some are kicks on
     Pymunk granules, the first of them gets the runner (a
-    :class:`~perga.engine.state.GranuleWriter`) for all. Soft granules (``spec.soft``) are
+    :class:`~perga.contact.rigid.batch.GranuleWriter`) for all. Soft granules (``spec.soft``) are
     kicked by their simulation through :func:`run_kicks`."""
     listed = scene.spec.effects
     effects = [

@@ -78,7 +78,7 @@ import pymunk.batch as pb
 from numpy.typing import NDArray
 
 from perga.engine import units as u
-from perga.engine.scene import Scene
+from perga.engine.machine import Scene
 
 _B = pb.BodyFields
 _A = pb.ArbiterFields

@@ -1,4 +1,4 @@
-"""Stepping a :class:`~perga.engine.scene.Scene`, recording impacts, reading state in SI.
+"""Stepping a :class:`~perga.engine.machine.Scene`, recording impacts, reading state in SI.
 
 Step order of :meth:`Simulation.step` (one Chipmunk ``space.step(dt)``, t_n -> t_{n+1}):
 
@@ -41,12 +41,12 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
+from perga.contact.rigid.batch import GranuleReader
+from perga.contact.rigid.outline import OutlineFilter
 from perga.engine import units as u
 from perga.engine.energy import EnergyLedger, EnergyMeter
-from perga.engine.outline_contacts import OutlineFilter
-from perga.engine.scene import Scene
-from perga.engine.spec import HammerSpec
-from perga.engine.state import GranuleReader
+from perga.engine.machine import Scene
+from perga.model.spec import HammerSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -68,7 +68,7 @@ class Impact:
     hammer_swing_angle_before, hammer_angular_velocity_before: the hammer's α (rad) and
     absolute angular velocity Ω (rad/s) at the contact's start. Rigid: α after the step's
     position update (Chipmunk moves bodies, then finds contacts), velocities and energies
-    before its impulses. Soft (:mod:`~perga.engine.soft_impacts`): the granule's velocity
+    before its impulses. Soft (:mod:`~perga.contact.soft.impacts`): the granule's velocity
     before the kernel call in which the contact began, the hammer's state after that step.
     """
 
@@ -144,7 +144,7 @@ class ImpactRecorder:
     A granule touching two convex pieces of one hammer in the same step (a notch) makes two
     Chipmunk contacts but one impact: their impulses along the first contact's normal and their
     dissipation are summed into the first one's row. With ``filtered`` (hammers of several
-    pieces: :mod:`~perga.engine.outline_contacts` drops contacts in ``pre_solve``) an impact
+    pieces: :mod:`~perga.contact.rigid.outline` drops contacts in ``pre_solve``) an impact
     starts at a contact's first step that is processed, not at its ``begin``.
     """
 

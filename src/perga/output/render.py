@@ -22,9 +22,9 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
 from perga.case import load_case
-from perga.engine.from_case import scene_spec
-from perga.engine.spec import HammerSpec
 from perga.geometry.polygon import outline_or_circle
+from perga.model.from_case import scene_spec
+from perga.model.spec import HammerSpec
 
 
 def _table(path: Path) -> np.ndarray:

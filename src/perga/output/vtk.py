@@ -31,7 +31,7 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   ``granule_energy_gain`` (J), ``dissipated`` (J), ``normal`` (3 components). With no impacts
   the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty arrays).
 
-With ``output.vtk_3d`` (a :class:`~perga.engine.spec.DrawingSpec` in the scene spec) also
+With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the scene spec) also
 ``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
 frames: see :mod:`perga.output.vtk3d`.
 
@@ -52,13 +52,13 @@ import pymunk
 import pyvista as pv
 from numpy.typing import NDArray
 
+from perga.contact.soft import polygons as pg
+from perga.contact.soft.model import SoftSimulation
 from perga.engine import units as u
 from perga.engine.simulation import FloatArray, Simulation
-from perga.engine.soft_simulation import SoftSimulation
-from perga.engine.spec import RotorSpec
 from perga.geometry.polygon import outline_or_circle
+from perga.model.spec import RotorSpec
 from perga.output import vtk3d
-from perga.soft import polygons as pg
 
 ROTOR_SIDES = 64
 """Sides of the polygon drawn for the rotor disc."""

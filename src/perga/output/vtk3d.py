@@ -1,6 +1,6 @@
 """The 3-D view of a run (case option ``output.vtk_3d``): the machine as closed triangle meshes,
 so that a ParaView scene looks like the machine. Written by :class:`perga.output.vtk.VtkRecorder`
-when the scene spec carries a :class:`~perga.engine.spec.DrawingSpec` (the parts' thicknesses;
+when the scene spec carries a :class:`~perga.model.spec.DrawingSpec` (the parts' thicknesses;
 the recorders see the simulation only, so the case's sizes travel in its spec).
 
 Files in ``RUN/vtk/`` (SI units), beside the 2-D ones of :mod:`perga.output.vtk`:

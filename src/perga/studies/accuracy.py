@@ -27,10 +27,10 @@ import numpy as np
 
 from perga.analytic.common import STANDARD_GRAVITY
 from perga.case import Case, CaseError
-from perga.engine.from_case import scene_spec
-from perga.engine.scene import build_scene
+from perga.contact.soft.model import SoftSimulation
+from perga.engine.machine import build_scene
 from perga.engine.simulation import Simulation
-from perga.engine.soft_simulation import SoftSimulation
+from perga.model.from_case import scene_spec
 from perga.studies.accuracy_scenes import (
     BOUNCE,
     BounceReference,

@@ -1,0 +1,297 @@
+"""Bulk, checked reads of the granules' state, and the one bulk write of their velocities, through
+``pymunk.batch`` (the one place it is used).
+
+Reading ``body.position`` for every granule in a Python loop costs about a microsecond per
+attribute; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C
+pass, about 100× faster (design §5). The batch API is experimental, so it is wrapped here and
+nowhere else, with these properties:
+
+* **It cannot select bodies.** ``get_space_bodies`` walks Chipmunk's body arrays: every
+  dynamic *and kinematic* body (the rotor and hinged hammers as well as the granules; Chipmunk
+  keeps kinematic bodies in its "dynamic" array), then the static ones (including
+  ``space.static_body`` once Pymunk has created it), then sleeping bodies. There is no filter
+  argument, so :class:`GranuleReader` reads every body together with its ``BODY_ID`` and picks
+  the granule rows with an index array computed once from the granule bodies' ids.
+* **The row order is not fixed.** Chipmunk removes a body by moving the last body of the array
+  into its slot, and Pymunk adds ``space.static_body`` on first access. The reader therefore
+  checks on every read, vectorised, that the ids at the cached rows are the granules' ids, and
+  recomputes the rows (a sort and a binary search, no Python loop) when they are not. A granule
+  body that is no longer in the space raises :class:`LookupError`. There is no slow fallback:
+  the only path is batch + index.
+* **Buffers are checked.** The id buffer must hold one entry per body and the float buffer
+  exactly ``len(fields)`` numbers per body, in the field order of the flags' bit values
+  (position, angle, velocity, angular velocity); otherwise :class:`RuntimeError`. Building a
+  reader also compares one read against the bodies' own properties, so a change of the
+  experimental layout in a future Pymunk fails loudly instead of returning shifted numbers.
+* **Writing is velocities only, through** :class:`GranuleWriter`. ``pymunk.batch.
+  set_space_bodies`` writes to *every* body (kinematic rotor, hammers, static bodies included),
+  in the order of the body walk, and does not check the buffer length (a short buffer wrote
+  NaN). The writer therefore never writes from a buffer of its own making: immediately before
+  each write it reads every body's velocity and id into the batch buffer (one C pass), checks
+  the ids and the buffer size as for a read, replaces only the granule rows and writes that
+  same buffer back, so every other body gets back the bits it holds. Only ``VELOCITY`` is
+  written (positions are not: Chipmunk returns a position through the body's transform, which
+  is not guaranteed to reproduce the stored bits for a body with an offset centre of gravity).
+  Building a writer checks, once, that a write lands in the granule rows the reader found and
+  nowhere else (a marked write, read back per body, then undone).
+
+Values are copies (the batch buffer is reused), converted to SI by one multiplication by the
+unit of :mod:`perga.engine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
+gives. Rows are in the spec's granule order. :class:`GranuleWriter` works in Chipmunk's
+internal units on both sides (its only client, :mod:`perga.engine.effects`, computes in them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pymunk.batch as pb
+from numpy.typing import NDArray
+
+from perga.engine import units as u
+
+if TYPE_CHECKING:  # scene.py imports effects.py, which imports this module
+    from perga.engine.machine import Scene
+
+FloatArray = NDArray[np.float64]
+_F = pb.BodyFields
+
+# floats per body of each readable field, in the order the batch iterator writes them
+# (ascending flag value)
+_WIDTH: dict[pb.BodyFields, int] = {
+    _F.POSITION: 2,
+    _F.ANGLE: 1,
+    _F.VELOCITY: 2,
+    _F.ANGULAR_VELOCITY: 1,
+}
+
+
+def _columns(fields: pb.BodyFields) -> dict[pb.BodyFields, slice]:
+    """Column slice of each requested field in a row of the float buffer."""
+    out: dict[pb.BodyFields, slice] = {}
+    start = 0
+    for flag in sorted(_WIDTH, key=lambda f: f.value):
+        if flag in fields:
+            out[flag] = slice(start, start + _WIDTH[flag])
+            start += _WIDTH[flag]
+    return out
+
+
+@dataclass(frozen=True)
+class GranuleState:
+    """One consistent read of all granules, SI, rows in spec order.
+
+    positions: centres, (n, 2), m; velocities: centre velocities, (n, 2), m/s;
+    angular_velocities: (n,), rad/s.
+    """
+
+    positions: FloatArray
+    velocities: FloatArray
+    angular_velocities: FloatArray
+
+
+class GranuleReader:
+    """Reads the granules of one :class:`~perga.engine.machine.Scene` through ``pymunk.batch``.
+
+    Build it once per scene (it records the granule bodies' ids and verifies the batch layout
+    once) and call it as often as needed; each call is one C pass over the space's bodies plus
+    a few numpy operations.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        self._space = scene.space
+        self._bodies = list(scene.granule_bodies)
+        self._ids = np.array([b.id for b in self._bodies], dtype=np.uintp)
+        if np.unique(self._ids).size != self._ids.size:
+            raise ValueError("granule bodies are not distinct")
+        self._buffer = pb.Buffer()
+        self._rows = np.zeros(0, dtype=np.intp)
+        if self._bodies:
+            self._verify_layout()
+
+    @property
+    def count(self) -> int:
+        """Number of granules."""
+        return len(self._bodies)
+
+    def positions(self) -> FloatArray:
+        """Granule centres, (n, 2), m."""
+        (p,) = self._read(_F.POSITION)
+        return p * u.LENGTH
+
+    def velocities(self) -> FloatArray:
+        """Granule centre velocities, (n, 2), m/s."""
+        (v,) = self._read(_F.VELOCITY)
+        return v * u.VELOCITY
+
+    def angular_velocities(self) -> FloatArray:
+        """Granule angular velocities, (n,), rad/s."""
+        (w,) = self._read(_F.ANGULAR_VELOCITY)
+        return w[:, 0] * u.ANGULAR_VELOCITY
+
+    def read(self) -> GranuleState:
+        """Positions, velocities and angular velocities from a single pass."""
+        p, v, w = self._read(_F.POSITION | _F.VELOCITY | _F.ANGULAR_VELOCITY)
+        return GranuleState(
+            positions=p * u.LENGTH,
+            velocities=v * u.VELOCITY,
+            angular_velocities=w[:, 0] * u.ANGULAR_VELOCITY,
+        )
+
+    # --- internals ---------------------------------------------------------------------------
+
+    def _read(self, fields: pb.BodyFields) -> list[FloatArray]:
+        """The granule rows of each requested field (internal units, ascending flag order),
+        each a fresh (n, width) array."""
+        columns = _columns(fields)
+        if not self._bodies:
+            return [np.zeros((0, c.stop - c.start)) for c in columns.values()]
+        width = sum(c.stop - c.start for c in columns.values())
+        ids, floats = self._fetch(fields | _F.BODY_ID, width)
+        table = floats.reshape(ids.size, width)[self._granule_rows(ids)]  # fancy indexing: a copy
+        return [table[:, c] for c in columns.values()]
+
+    def _granule_rows(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
+        """The granules' rows in a batch read whose id column is ``ids`` (cached, checked)."""
+        rows = self._rows
+        if (
+            rows.size != self._ids.size
+            or rows.max() >= ids.size
+            or not (np.array_equal(ids[rows], self._ids))
+        ):
+            rows = self._rows = self._locate(ids)
+        return rows
+
+    def _fetch(
+        self, fields: pb.BodyFields, width: int, buffer: pb.Buffer | None = None
+    ) -> tuple[NDArray[np.uintp], FloatArray]:
+        """One batch read of ``fields`` (must include BODY_ID) into ``buffer`` (default: the
+        reader's) with its buffer sizes checked. The returned arrays are views of the reused
+        buffer, valid until its next fetch; the float view is writable."""
+        if buffer is None:
+            buffer = self._buffer
+        buffer.clear()
+        pb.get_space_bodies(self._space, fields, buffer)
+        ids = np.frombuffer(buffer.int_buf(), dtype=np.uintp)
+        floats = np.frombuffer(buffer.float_buf(), dtype=np.float64)
+        if floats.size != ids.size * width:
+            raise RuntimeError(
+                f"pymunk.batch returned {floats.size} floats for {ids.size} bodies, expected "
+                f"{width} per body ({fields!r}): the experimental batch layout has changed"
+            )
+        return ids, floats
+
+    def _locate(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
+        """Row of each granule body in a batch read whose id column is ``ids``."""
+        if ids.size == 0:
+            missing = np.arange(self._ids.size)
+        else:
+            order = np.argsort(ids, kind="stable")
+            where = np.searchsorted(ids[order], self._ids)
+            where[where >= ids.size] = 0
+            rows = order[where]
+            missing = np.flatnonzero(ids[rows] != self._ids)
+        if missing.size:
+            raise LookupError(
+                f"granule bodies {missing[:10].tolist()} (spec indices) are not in the space"
+            )
+        return rows.astype(np.intp)
+
+    def _verify_layout(self) -> None:
+        """Compare one full read against the first and last granule's own properties."""
+        fields = _F.POSITION | _F.ANGLE | _F.VELOCITY | _F.ANGULAR_VELOCITY
+        p, a, v, w = self._read(fields)
+        for i in {0, len(self._bodies) - 1}:
+            b = self._bodies[i]
+            expected = [*b.position, b.angle, *b.velocity, b.angular_velocity]
+            got = [*p[i], *a[i], *v[i], *w[i]]
+            if not np.array_equal(got, expected, equal_nan=True):
+                raise RuntimeError(
+                    f"pymunk.batch layout check failed for granule {i}: read {got}, the body "
+                    f"holds {expected} (position, angle, velocity, angular velocity)"
+                )
+
+
+class GranuleWriter(GranuleReader):
+    """A :class:`GranuleReader` that can also set all granules' velocities in one batch write.
+
+    Both :meth:`read_internal` and :meth:`write_internal_velocities` work in Chipmunk's internal
+    units (mm/ms, mm). A write reads every body's velocity first and writes those bits back to
+    every body but the granules (module docstring), so it is safe at any time between steps;
+    it is not meant for use inside ``space.step`` callbacks.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        super().__init__(scene)
+        self._write_buffer = pb.Buffer()  # only ever filled by get_space_bodies
+        if self._bodies:
+            self._verify_write()
+
+    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        """Granule velocities (n, 2), internal units, and their positions (n, 2) if asked for
+        (else None), from one batch pass. Fresh arrays."""
+        if positions:
+            p, v = self._read(_F.POSITION | _F.VELOCITY)
+            return v, p
+        (v,) = self._read(_F.VELOCITY)
+        return v, None
+
+    def write_internal_velocities(self, velocities: FloatArray) -> None:
+        """Set every granule's velocity (rows in spec order, (n, 2), internal units, finite);
+        every other body keeps its velocity bit for bit."""
+        new = np.asarray(velocities, dtype=np.float64)
+        if new.shape != (len(self._bodies), 2):
+            raise ValueError(
+                f"expected granule velocities of shape ({len(self._bodies)}, 2), got {new.shape}"
+            )
+        if not np.isfinite(new).all():
+            bad = np.flatnonzero(~np.isfinite(new).all(axis=1))
+            raise ValueError(f"non-finite velocities for granules {bad[:10].tolist()}")
+        if not self._bodies:
+            return
+        buffer = self._write_buffer
+        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+        floats.reshape(ids.size, 2)[self._granule_rows(ids)] = new
+        # the buffer holds exactly 2 floats per body in the walk's order, read just now
+        pb.set_space_bodies(self._space, _F.VELOCITY, buffer)
+
+    def _verify_write(self) -> None:
+        """Write marked velocities to the first and last granule, check that exactly those
+        bodies changed (per-body getters for them, a batch read for all), then undo it."""
+        buffer = self._write_buffer
+        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+        before_ids, before = ids.copy(), floats.reshape(-1, 2).copy()
+        (original,) = self._read(_F.VELOCITY)
+        marked = original.copy()
+        ends = sorted({0, len(self._bodies) - 1})
+        for k, i in enumerate(ends):
+            marked[i] = original[i] + (1.0 + k, -2.0 - k)
+        try:
+            self.write_internal_velocities(marked)
+            ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+            expected = before.copy()
+            rows = self._granule_rows(before_ids)
+            expected[rows[ends]] = marked[ends]
+            per_body = [tuple(self._bodies[i].velocity) for i in ends]
+            if (
+                not np.array_equal(ids, before_ids)
+                or not np.array_equal(floats.reshape(-1, 2), expected)
+                or per_body != [tuple(marked[i]) for i in ends]
+            ):
+                raise RuntimeError(
+                    "pymunk.batch.set_space_bodies check failed: a marked write of granules "
+                    f"{ends} did not land in their rows only (the experimental batch layout "
+                    "has changed)"
+                )
+        finally:
+            self.write_internal_velocities(original)
+        if [tuple(self._bodies[i].velocity) for i in ends] != [tuple(original[i]) for i in ends]:
+            raise RuntimeError("pymunk.batch.set_space_bodies check failed: undo did not restore")
+
+
+def granule_state(scene: Scene) -> GranuleState:
+    """One-off read of all granules (builds a :class:`GranuleReader`; keep a reader instead
+    when reading repeatedly)."""
+    return GranuleReader(scene).read()

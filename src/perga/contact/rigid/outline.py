@@ -1,0 +1,72 @@
+"""Rigid contacts with hammers of several convex pieces: only the hammer's outline counts.
+
+Chipmunk collides a granule with each convex piece on its own, so near a seam between two
+pieces it makes contacts that the hammer's outline does not have: with the seam itself (a
+"ghost" normal along the diagonal) and with a corner split between two pieces (blended
+normals). Measured on an L-shaped welded hammer struck at its split corner along the corner's
+bisector: the granule left 8° off the bisector, against straight back from the square with
+that corner. ``OutlineFilter`` gives every Chipmunk contact of such a hammer, in ``pre_solve``,
+the contact of the soft kernel's rule (:func:`perga.contact.soft.polygons.closest_feature` over the
+piece's solid edges and owned corners): a piece whose feature is not the outline's, or that
+the granule does not overlap by the outline's rule, has no contact this step; the others get
+the outline's normal and depth. Scenes with convex hammers
+only install nothing.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pymunk
+
+from perga.contact.soft.polygons import KINEMATIC, closest_feature, piece_features, polygon_set
+from perga.engine import units as u
+from perga.engine.machine import Scene
+from perga.geometry.polygon import counter_clockwise
+
+
+class OutlineFilter:
+    """The pieces of the scene's multi-piece hammers in their bodies' frames (SI), with the
+    outline features of :func:`~perga.contact.soft.polygons.piece_features`."""
+
+    def __init__(self, scene: Scene) -> None:
+        self._piece: dict[pymunk.Shape, tuple[tuple[np.ndarray, ...], int]] = {}
+        for shapes, outline in zip(scene.hammer_shapes, scene.hammer_outlines, strict=True):
+            if len(shapes) < 2:
+                continue
+            pieces = [counter_clockwise(np.array(s.get_vertices()) * u.LENGTH) for s in shapes]
+            loop = counter_clockwise(np.array(outline) * u.LENGTH)
+            polygons = polygon_set(
+                pieces,
+                np.zeros((len(pieces), 2)),
+                kind=[KINEMATIC] * len(pieces),
+                features=piece_features(pieces, [loop]),
+            )
+            arrays = polygons.arrays()
+            for k, shape in enumerate(shapes):
+                self._piece[shape] = (arrays, k)
+
+    def __bool__(self) -> bool:
+        return bool(self._piece)
+
+    def pre_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: Any) -> None:
+        """Replace a granule-hammer contact (shapes granule, hammer) by the outline's, or drop
+        it for this step."""
+        granule, hammer = arbiter.shapes
+        piece = self._piece.get(hammer)
+        if piece is None:
+            return
+        body = hammer.body
+        centre = granule.body.position
+        x, y = body.world_to_local(centre) * u.LENGTH
+        d, nx, ny = closest_feature(x, y, *piece)
+        d = d / u.LENGTH
+        r = granule.radius
+        if not d < r:  # not the outline's feature, or not touching it
+            arbiter.process_collision = False
+            return
+        arbiter.process_collision = True  # the flag stays as set: a rejected step leaves it off
+        outward = pymunk.Vec2d(nx, ny).rotated(body.angle)  # from the hammer to the granule
+        point = pymunk.ContactPoint(centre - outward * r, centre - outward * d, d - r)
+        arbiter.contact_point_set = pymunk.ContactPointSet(-outward, (point,))

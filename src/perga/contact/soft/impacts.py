@@ -1,0 +1,162 @@
+"""Granule-hammer impacts of soft granules, as :class:`~perga.engine.simulation.Impact` rows.
+
+A soft impact lasts many granule steps. Between Pymunk steps the log compares each
+(granule, hammer) pair's contact flag in the kernel's polygon history: a pair that became active
+starts an impact (the granule's state before the Pymunk step, the hammer's kinetic energy, the
+contact normal from the closest feature of the hammer's outline and the relative velocity of
+the contact points), a pair that became inactive completes it (the state after, and the
+kernel's per-contact totals: normal and tangential impulse, energy dissipated). Normal and
+tangent turn with the hammer between start and end (they are fixed in the hammer's frame).
+An impact is written when it ends; its ``time`` is the end of the Pymunk step in which it began.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from perga.contact.soft import SoftGranules
+from perga.contact.soft.polygons import (
+    HIST_ACTIVE,
+    HIST_DISSIPATED,
+    HIST_NORMAL_IMPULSE,
+    closest_feature,
+)
+from perga.engine.simulation import HammerState, Impact
+
+
+@dataclass(frozen=True)
+class _Start:
+    time: float
+    normal: tuple[float, float]
+    hammer_angle: float
+    normal_velocity: float
+    tangential_velocity: float
+    point: tuple[float, float]
+    granule_energy: float
+    granule_velocity: tuple[float, float]
+    hammer: HammerState
+
+
+def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
+    c, s = math.cos(angle), math.sin(angle)
+    return (c * n[0] - s * n[1], s * n[0] + c * n[1])
+
+
+class SoftImpactLog:
+    """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
+    of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
+    its own); call :meth:`before` before and :meth:`after` after every kernel call.
+    ``hammer_state(h)`` gives hammer h's :class:`~perga.engine.simulation.HammerState` now."""
+
+    def __init__(
+        self,
+        granules: SoftGranules,
+        hammer_of: np.ndarray,
+        hammer_state: Callable[[int], HammerState],
+    ) -> None:
+        self.impacts: list[Impact] = []
+        self._g = granules
+        self._hammer_of = hammer_of
+        self._hammer_state = hammer_state
+        self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        self._open: dict[tuple[int, int], _Start] = {}
+        self._x = granules.x.copy()
+        self._v = granules.v.copy()
+        self._w = granules.w.copy()
+        self._vertices = granules.polygons.vertices.copy()
+        self._com = granules.polygons.com.copy()
+
+    def _energy(self, i: int, v: np.ndarray, w: float) -> float:
+        g = self._g
+        return float(0.5 * g.m[i] * (v @ v) + 0.5 * g.inertia[i] * w * w)
+
+    def _relative(
+        self, i: int, k: int, x, v, w, n, com
+    ) -> tuple[float, float, tuple[float, float]]:
+        """Normal and tangential velocity of granule i's contact point relative to polygon k's
+        material point there (polygon centre of mass ``com``), and the point (m/s, m)."""
+        p = self._g.polygons
+        r = self._g.r[i]
+        point = (x[0] - r * n[0], x[1] - r * n[1])
+        t = (-n[1], n[0])
+        rel_x = v[0] - w * r * t[0] - (p.velocity[k, 0] - p.omega[k] * (point[1] - com[1]))
+        rel_y = v[1] - w * r * t[1] - (p.velocity[k, 1] + p.omega[k] * (point[0] - com[0]))
+        vn = float(rel_x * n[0] + rel_y * n[1])
+        return vn, float(rel_x * t[0] + rel_y * t[1]), (float(point[0]), float(point[1]))
+
+    def before(self) -> None:
+        """Keep the granules' and polygons' state before a kernel call (starts need it)."""
+        g = self._g
+        self._x[:] = g.x
+        self._v[:] = g.v
+        self._w[:] = g.w
+        self._vertices[:] = g.polygons.vertices
+        self._com[:] = g.polygons.com
+
+    def after(self, time: float, angles: np.ndarray) -> None:
+        """Open and close impacts after a kernel call; ``time``: end of the step, s;
+        ``angles``: each hammer's body angle now, rad."""
+        g = self._g
+        hist = g.polygon_hist
+        active = (hist[:, :, HIST_ACTIVE] != 0.0) & (self._hammer_of >= 0)
+        for i, k in zip(*np.nonzero(self._active & ~active), strict=True):
+            self._close(int(i), int(k), hist[i, k], angles)
+        for i, k in zip(*np.nonzero(active & ~self._active), strict=True):
+            angle = angles[self._hammer_of[k]]
+            self._open[(int(i), int(k))] = self._start(int(i), int(k), time, angle)
+        self._active = active
+
+    def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
+        before = (self._vertices, *self._g.polygons.arrays()[1:])
+        d, nx, ny = closest_feature(self._x[i, 0], self._x[i, 1], before, k)
+        if not math.isfinite(d):  # before the call the centre faced another piece's feature
+            now = self._g.polygons.arrays()
+            _, nx, ny = closest_feature(self._g.x[i, 0], self._g.x[i, 1], now, k)
+        n = (float(nx), float(ny))
+        vn, vt, point = self._relative(
+            i, k, self._x[i], self._v[i], float(self._w[i]), n, self._com[k]
+        )
+        return _Start(
+            time=time,
+            normal=n,
+            hammer_angle=angle,
+            normal_velocity=vn,
+            tangential_velocity=vt,
+            point=point,
+            granule_energy=self._energy(i, self._v[i], float(self._w[i])),
+            granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
+            hammer=self._hammer_state(int(self._hammer_of[k])),
+        )
+
+    def _close(self, i: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
+        start = self._open.pop((i, k), None)
+        if start is None:  # began before the log (not expected: it starts with the run)
+            return
+        g = self._g
+        hammer = int(self._hammer_of[k])
+        n = _rotate(start.normal, float(angles[hammer]) - start.hammer_angle)
+        vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n, g.polygons.com[k])
+        self.impacts.append(
+            Impact(
+                time=start.time,
+                granule=i,
+                hammer=hammer,
+                normal_velocity_before=start.normal_velocity,
+                normal_velocity_after=vn,
+                tangential_velocity_before=start.tangential_velocity,
+                tangential_velocity_after=vt,
+                normal_impulse=float(row[HIST_NORMAL_IMPULSE]),
+                point=start.point,
+                normal=start.normal,
+                granule_energy_gain=self._energy(i, g.v[i], float(g.w[i])) - start.granule_energy,
+                dissipated=float(row[HIST_DISSIPATED]),
+                hammer_energy_before=start.hammer.energy,
+                granule_velocity_before=start.granule_velocity,
+                hammer_swing_angle_before=start.hammer.swing_angle,
+                hammer_angular_velocity_before=start.hammer.angular_velocity,
+            )
+        )

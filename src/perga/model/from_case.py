@@ -1,0 +1,168 @@
+"""Case (the validated case file) -> SceneSpec (what the engine builds): the one mapping.
+
+Hammers take their outline and mass properties from :mod:`perga.case.hammer_geometry` (a plate's
+rectangle, or a geometry file), in the hammer frame (hinge at the origin, axis +x), spaced
+evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
+(:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
+listed in the case, and only those, become the scene's effects; a soft contact model gets its
+stiffness and steps from :mod:`perga.case.timestep`; ``output.vtk_3d`` adds the parts'
+thicknesses for the 3-D view of the output (:class:`~perga.model.spec.DrawingSpec`).
+"""
+
+from __future__ import annotations
+
+from perga.case.hammer_geometry import hammer_geometry
+from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
+from perga.case.placement import initial_state
+from perga.case.schema import Case
+from perga.case.timestep import normal_stiffness, step_plan
+from perga.geometry.polygon import vertex_tuples
+from perga.model.spec import (
+    AirDragSpec,
+    ChamberSpec,
+    ContactSpec,
+    DrawingSpec,
+    DriveSpec,
+    EffectsSpec,
+    FloorFrictionSpec,
+    GranuleSpec,
+    HammerSpec,
+    RotorSpec,
+    SceneSpec,
+    SoftContactSpec,
+)
+
+
+def _hammers(case: Case) -> tuple[HammerSpec, ...]:
+    h, g = case.hammers, hammer_geometry(case)
+    return tuple(
+        HammerSpec(
+            outline=g.outline,
+            mass=g.mass,
+            moment_about_hinge=g.moment_about_hinge,
+            centre_of_mass=g.centre_of_mass,
+            hinge_radius=h.hinge_radius,
+            angle_on_rotor=angle,
+            mount=h.mount,
+            material=h.material,
+            swing_angle=h.swing_angle,
+            swing_limit=h.swing_limit,
+            velocity=h.velocity,
+        )
+        for angle in hammer_angles(case)
+    )
+
+
+def _granules(case: Case) -> tuple[GranuleSpec, ...]:
+    g = case.granules
+    positions, velocities = initial_state(case)
+    return tuple(
+        GranuleSpec(
+            position=(float(p[0]), float(p[1])),
+            velocity=(float(v[0]), float(v[1])),
+            radius=g.radius,
+            mass=case.granule_mass,
+            material=g.material,
+            rolls=g.rolls,
+        )
+        for p, v in zip(positions, velocities, strict=True)
+    )
+
+
+def _effects(case: Case) -> EffectsSpec:
+    fx = case.effects
+    floor = fx.floor_friction
+    drag = fx.air_drag
+    return EffectsSpec(
+        floor_friction=FloorFrictionSpec(floor.floor, floor.friction, case.gravity)
+        if floor
+        else None,
+        air_drag=(
+            AirDragSpec(drag.air_density, drag.drag_coefficient, case.granule_thickness)
+            if drag
+            else None
+        ),
+        hinge_friction=case.hammers.hinge_friction if fx.hinge_friction else None,
+        drive=(
+            DriveSpec(case.rotor.inertia, case.rotor.torque_limit) if fx.rotor_inertia else None
+        ),
+    )
+
+
+def _soft(case: Case) -> SoftContactSpec | None:
+    cm = case.contact_model
+    if cm.kind == "rigid":
+        return None
+    return SoftContactSpec(
+        model=cm.kind,
+        stiffness=normal_stiffness(case),
+        tangential_ratio=cm.tangential_ratio,
+        rolling=cm.rolling,
+        end=cm.end,
+        substeps=cm.granule_substeps,
+    )
+
+
+def _rotor(case: Case) -> RotorSpec:
+    disc = rotor_geometry(case)
+    if disc is None:
+        return RotorSpec(case.rotor.angular_velocity, case.rotor.radius)
+    return RotorSpec(case.rotor.angular_velocity, disc.radius, vertex_tuples(disc.outline))
+
+
+def _chamber(case: Case) -> ChamberSpec:
+    c, g = case.chamber, chamber_geometry(case)
+    assert c is not None and g is not None
+    outline = None if g.outline is None else vertex_tuples(g.outline)
+    return ChamberSpec(g.inner_radius, c.wall_thickness, c.material, outline=outline)
+
+
+def _drawing(case: Case) -> DrawingSpec | None:
+    """The 3-D view's sizes with ``output.vtk_3d`` (None without): every hammer the geometry's
+    thickness, the rotor its mesh's height (else the hammers'), the chamber wall as tall as the
+    tallest part, the granules ``case.granule_thickness``; m."""
+    if not case.output.vtk_3d:
+        return None
+    hammer = hammer_geometry(case).thickness
+    disc = rotor_geometry(case)
+    rotor = disc.thickness if disc is not None and disc.thickness is not None else hammer
+    granule = case.granule_thickness
+    return DrawingSpec(
+        hammer_thickness=(hammer,) * len(hammer_angles(case)),
+        rotor_thickness=rotor,
+        chamber_height=max(hammer, rotor, granule),
+        granule_thickness=granule,
+    )
+
+
+def scene_spec(case: Case) -> SceneSpec:
+    """The engine's description of a validated case (raises ValueError without a placement or
+    a chamber: a simulation needs both)."""
+    if case.chamber is None:
+        raise ValueError("chamber is missing: a simulation needs the wall around the rotor")
+    granules = _granules(case)
+    hammers = _hammers(case)
+    pairs = {frozenset((case.granules.material, case.hammers.material))}
+    pairs.add(frozenset((case.granules.material, case.chamber.material)))
+    if case.effects.granule_collisions:
+        pairs.add(frozenset((case.granules.material,)))
+    contacts = tuple(
+        ContactSpec(c.pair[0], c.pair[1], c.restitution, c.friction)
+        for c in case.contacts
+        if frozenset(c.pair) in pairs
+    )
+    gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
+    return SceneSpec(
+        rotor=_rotor(case),
+        hammers=hammers,
+        granules=granules,
+        contacts=contacts,
+        dt=step_plan(case).granule,
+        iterations=case.solver.iterations,
+        gravity=gravity,
+        granule_collisions=case.effects.granule_collisions is not None,
+        chamber=_chamber(case),
+        effects=_effects(case),
+        soft=_soft(case),
+        drawing=_drawing(case),
+    )

@@ -1,0 +1,100 @@
+"""Time steps of a case (perga.case.timestep): rigid and soft, against the contact closed forms."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+from perga.analytic.contact import HERTZ_DURATION_COEFFICIENT, tunnelling_time_step
+from perga.case import load_case
+from perga.case.timestep import (
+    MAX_ROTATION_PER_STEP,
+    contact_durations,
+    fastest_relative_speed,
+    hammer_effective_mass,
+    normal_stiffness,
+    step_plan,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+SINGLE = (ROOT / "cases" / "single-granule.toml").read_text()
+
+
+def _case(tmp_path, extra: str, replace: tuple[str, str] = ("", "")):
+    path = tmp_path / "case.toml"
+    path.write_text(SINGLE.replace(*replace) + "\n" + extra)
+    return load_case(path)
+
+
+def test_rigid_auto_step_is_half_the_tunnelling_bound_or_the_rotation_bound(tmp_path):
+    case = _case(tmp_path, "")
+    plan = step_plan(case)
+    bound = tunnelling_time_step(0.0025, case.hammer_plate.thickness, fastest_relative_speed(case))
+    rotation = MAX_ROTATION_PER_STEP / case.rotor.angular_velocity
+    assert plan.granule == plan.machine == min(0.5 * bound, rotation)
+    assert math.isinf(plan.contact_duration)
+
+
+def test_linear_duration_sets_the_wall_contact_and_hammer_contact_is_shorter(tmp_path):
+    case = _case(tmp_path, '[contact_model]\nkind = "linear"\nduration = 1e-4\n')
+    durations = contact_durations(case)
+    # by definition: a granule on a rigid wall with the granule-hammer e (the same e here)
+    assert durations["granule-wall"] == pytest.approx(1e-4, rel=1e-12)
+    # same k and zeta: t_c scales as sqrt(m_eff); the hinged hammer's tip offers I_A/reach²
+    m, big = case.granule_mass, hammer_effective_mass(case)
+    plate = case.hammer_plate
+    assert big == pytest.approx(plate.inertia_about_hinge / plate.tip_distance**2, rel=1e-15)
+    expected = 1e-4 * math.sqrt(big / (m + big))
+    assert durations["granule-hammer"] == pytest.approx(expected, rel=1e-12)
+    plan = step_plan(case)
+    assert plan.governed_by == "contact"
+    assert plan.granule == pytest.approx(expected / 50, rel=1e-12)
+    assert plan.machine == plan.granule
+
+
+def test_granule_substeps_multiply_the_machine_step(tmp_path):
+    case = _case(
+        tmp_path, '[contact_model]\nkind = "linear"\nduration = 1e-4\ngranule_substeps = 4\n'
+    )
+    plan = step_plan(case)
+    assert plan.machine == pytest.approx(4 * plan.granule, rel=1e-15)
+
+
+def test_hertz_duration_is_the_undamped_closed_form_at_e_1(tmp_path):
+    """e = 1: no damping, t_c = C (m_eff²/(k² v))^{1/5}, k = k_n √R_eff, at the fastest speed."""
+    case = _case(
+        tmp_path,
+        '[contact_model]\nkind = "hertz"\nstiffness = 1e8\n',
+        ("restitution = 0.7", "restitution = 1.0"),
+    )
+    k = normal_stiffness(case) * math.sqrt(0.0025)
+    v = fastest_relative_speed(case)
+    m = case.granule_mass
+    expected = HERTZ_DURATION_COEFFICIENT * (m * m / (k * k * v)) ** 0.2
+    assert contact_durations(case)["granule-wall"] == pytest.approx(expected, rel=1e-6)
+
+
+def test_given_soft_step_is_the_granule_step(tmp_path):
+    case = _case(
+        tmp_path,
+        '[contact_model]\nkind = "linear"\nstiffness = 2e4\ngranule_substeps = 3\n',
+        ("[solver]\n", "[solver]\ndt = 1e-6\n"),
+    )
+    plan = step_plan(case)
+    assert (plan.granule, plan.governed_by) == (1e-6, "given")
+    assert plan.machine == pytest.approx(3e-6, rel=1e-15)
+
+
+def test_gravity_in_the_plane_adds_a_fall_across_the_chamber(tmp_path):
+    """A vertical rotor: a granule can fall across the chamber, √(2g·2R) on top of the rotor's
+    speeds (R = 0.2 m: 2.80 m/s), so a Hertz contact is planned at that speed, not at rest."""
+    flat = _case(tmp_path, "")
+    floor = '[effects.floor_friction]\nfloor = "stationary"\nfriction = 0.35\n'
+    assert floor in SINGLE
+    text = SINGLE.replace(floor, "[effects.gravity_in_plane]\n")
+    path = tmp_path / "vertical.toml"
+    path.write_text(text.replace('plane = "horizontal"', 'plane = "vertical"'))
+    vertical = load_case(path)
+    assert fastest_relative_speed(vertical) == pytest.approx(
+        fastest_relative_speed(flat) + math.sqrt(4 * 9.80665 * 0.2), rel=1e-12
+    )

@@ -1,0 +1,334 @@
+"""Batch state reads and velocity writes (perga.contact.rigid.batch) against per-body reads and writes
+in a Python loop.
+
+Tolerance: exact. The reader multiplies the very float64 values Chipmunk holds by the same unit
+factor as the reference, so any difference would be a wrong row or column, not rounding; the
+writer writes float64 values and every other body's own bits back.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pymunk
+import pytest
+from tests.engine.helpers import plate
+
+from perga.contact.rigid.batch import GranuleReader, GranuleState, GranuleWriter, granule_state
+from perga.engine import (
+    ContactSpec,
+    GranuleSpec,
+    HammerSpec,
+    RotorSpec,
+    Scene,
+    SceneSpec,
+    Simulation,
+    build_scene,
+)
+from perga.contact.rigid import batch as state_module
+from perga.engine import units as u
+
+OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s
+RADIUS = 1.5e-3  # m
+
+
+def _spec(n_rings: int = 3) -> SceneSpec:
+    """Kinematic rotor; four hinged, one welded and one free hammer; a ring of rolling and
+    sliding granules in the hammers' sweep, granule collisions on."""
+
+    def bar(x0: float, x1: float, mass: float, **kwargs: object) -> HammerSpec:
+        return plate(x0, x1, -0.003, 0.003, mass, material="steel", **kwargs)
+
+    hammers = [
+        bar(0.0, 0.06, 0.05, hinge_radius=0.08, angle_on_rotor=k * math.pi / 3, mount="hinged")
+        for k in range(4)
+    ]
+    hammers.append(
+        bar(0.0, 0.05, 0.05, hinge_radius=0.08, angle_on_rotor=4 * math.pi / 3, mount="welded")
+    )
+    free = {"velocity": (-5.0, 1.0), "angular_velocity": 3.0}
+    hammers.append(
+        bar(-0.01, 0.01, 0.02, hinge_radius=0.3, angle_on_rotor=0.0, mount="free", **free)
+    )
+    granules = []
+    for ring in range(n_rings):
+        radius = 0.10 + 0.004 * ring
+        count = int(2 * math.pi * radius / (2.6 * RADIUS))
+        for k in range(count):
+            phi = 2 * math.pi * (k + 0.5 * ring) / count
+            gap = min(
+                abs((phi - j * math.pi / 3 + math.pi) % (2 * math.pi) - math.pi) for j in range(6)
+            )
+            if gap < 0.08:
+                continue  # keep clear of the hammers' start positions
+            granules.append(
+                GranuleSpec(
+                    position=(radius * math.cos(phi), radius * math.sin(phi)),
+                    velocity=(0.3 * math.sin(3 * phi), -0.2 * math.cos(phi)),
+                    radius=RADIUS,
+                    mass=5e-6,
+                    material="bb",
+                    rolls=k % 3 != 0,
+                    angular_velocity=OMEGA if k % 3 == 0 else 10.0 * math.cos(phi),
+                )
+            )
+    return SceneSpec(
+        rotor=RotorSpec(omega=OMEGA, radius=0.07),
+        hammers=tuple(hammers),
+        granules=tuple(granules),
+        contacts=(
+            ContactSpec("bb", "steel", restitution=0.6, friction=0.4),
+            ContactSpec("bb", "bb", restitution=0.5, friction=0.3),
+        ),
+        dt=2e-5,
+        granule_collisions=True,
+    )
+
+
+def _loop(sim: Simulation) -> GranuleState:
+    """Reference: every granule body's attributes read one by one."""
+    bodies = sim.scene.granule_bodies
+    return GranuleState(
+        positions=np.array([tuple(b.position) for b in bodies], dtype=float) * u.LENGTH,
+        velocities=np.array([tuple(b.velocity) for b in bodies], dtype=float) * u.VELOCITY,
+        angular_velocities=np.array([b.angular_velocity for b in bodies], dtype=float)
+        * u.ANGULAR_VELOCITY,
+    )
+
+
+def _assert_same(got: GranuleState, expected: GranuleState) -> None:
+    for name in ("positions", "velocities", "angular_velocities"):
+        a, b = getattr(got, name), getattr(expected, name)
+        assert a.shape == b.shape and a.dtype == np.float64, name
+        assert np.all(np.isfinite(a)), name
+        np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+@pytest.fixture(scope="module")
+def stepped() -> Simulation:
+    """The scene after 3 ms (hammers have hit granules, granules hit each other)."""
+    sim = Simulation(build_scene(_spec()))
+    sim.run(3e-3)
+    return sim
+
+
+def test_scene_is_a_real_test(stepped: Simulation) -> None:
+    # the reads below mean something only if bodies of every kind are in the space and the
+    # granules have been struck: kinematic rotor, dynamic hammers, many granules in motion
+    kinds = {b.body_type for b in stepped.scene.space.bodies}
+    assert kinds == {pymunk.Body.KINEMATIC, pymunk.Body.DYNAMIC}
+    assert len(stepped.impacts) > 5
+    speeds = np.linalg.norm(_loop(stepped).velocities, axis=1)
+    assert speeds.max() > 5.0
+
+
+def test_matches_python_loop_exactly(stepped: Simulation) -> None:
+    reader = GranuleReader(stepped.scene)
+    expected = _loop(stepped)
+    _assert_same(reader.read(), expected)
+    np.testing.assert_array_equal(reader.positions(), expected.positions)
+    np.testing.assert_array_equal(reader.velocities(), expected.velocities)
+    np.testing.assert_array_equal(reader.angular_velocities(), expected.angular_velocities)
+    _assert_same(granule_state(stepped.scene), expected)
+
+
+def test_matches_loop_while_stepping() -> None:
+    sim = Simulation(build_scene(_spec(n_rings=2)))
+    reader = GranuleReader(sim.scene)
+    for _ in range(5):
+        sim.run(4e-4)
+        _assert_same(reader.read(), _loop(sim))
+
+
+def test_rows_are_in_spec_order() -> None:
+    spec = _spec(n_rings=2)
+    reader = GranuleReader(build_scene(spec))
+    state = reader.read()
+    assert reader.count == len(spec.granules) == state.positions.shape[0]
+    for i, g in enumerate(spec.granules):
+        # SI -> mm -> SI: x / 1e-3 * 1e-3 is within 1 ulp of x
+        for got, want in zip(state.positions[i], g.position, strict=True):
+            assert abs(got - want) <= np.spacing(abs(want))
+        for got, want in zip(state.velocities[i], g.velocity, strict=True):
+            assert got == want  # the velocity unit is 1 (m/s = mm/ms)
+        assert abs(state.angular_velocities[i] - g.angular_velocity) <= np.spacing(
+            abs(g.angular_velocity)
+        )
+
+
+def test_survives_reordering_of_chipmunks_body_array() -> None:
+    sim = Simulation(build_scene(_spec(n_rings=2)))
+    reader = GranuleReader(sim.scene)
+    sim.run(2e-4)
+    _assert_same(reader.read(), _loop(sim))
+    # removing a body moves Chipmunk's last body into its slot; Pymunk creates and adds
+    # space.static_body on first access: both change the rows of the batch read
+    free = sim.scene.hammer_bodies[-1]
+    sim.scene.space.remove(free, *free.shapes)
+    assert sim.scene.space.static_body is not None
+    sim.run(2e-4)
+    _assert_same(reader.read(), _loop(sim))
+
+
+def test_granule_missing_from_space_is_an_error() -> None:
+    scene = build_scene(_spec(n_rings=1))
+    reader = GranuleReader(scene)
+    body = scene.granule_bodies[3]
+    scene.space.remove(body, *body.shapes)
+    with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
+        reader.positions()
+
+
+def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    scene = build_scene(_spec(n_rings=1))
+    reader = GranuleReader(scene)
+    real = state_module.pb.get_space_bodies
+
+    def short(space: pymunk.Space, fields: object, buffer: object) -> None:
+        real(space, fields, buffer)
+        buffer._float_arr.num -= 1  # one float missing, as a changed layout would give
+
+    monkeypatch.setattr(state_module.pb, "get_space_bodies", short)
+    with pytest.raises(RuntimeError, match="expected 2 per body"):
+        reader.positions()
+
+
+def test_no_granules() -> None:
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=10.0, radius=0.1),
+        hammers=(),
+        granules=(),
+        contacts=(),
+        dt=1e-5,
+    )
+    state = GranuleReader(build_scene(spec)).read()
+    assert state.positions.shape == (0, 2)
+    assert state.velocities.shape == (0, 2)
+    assert state.angular_velocities.shape == (0,)
+
+
+# --- the writer ------------------------------------------------------------------------------
+
+
+def _everything(scene: Scene) -> list[tuple[float, ...]]:
+    """Every body's (static body included) position, angle, velocity and angular velocity."""
+    bodies = [*scene.space.bodies, scene.space.static_body]
+    return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
+
+
+def _others(scene: Scene) -> list[tuple[float, ...]]:
+    granules = set(scene.granule_bodies)
+    bodies = [b for b in scene.space.bodies if b not in granules] + [scene.space.static_body]
+    return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
+
+
+def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
+    scene = stepped.scene
+    writer = GranuleWriter(scene)  # its construction check writes and undoes: nothing changes
+    before, others = _loop(stepped), _others(scene)
+    _assert_same(writer.read(), before)
+    v, p = writer.read_internal(positions=True)
+    assert p is not None
+    np.testing.assert_array_equal(p * u.LENGTH, before.positions)
+    np.testing.assert_array_equal(v * u.VELOCITY, before.velocities)
+    assert writer.read_internal(positions=False)[1] is None
+
+    rng = np.random.default_rng(3)
+    new = rng.normal(scale=7.0, size=v.shape)
+    writer.write_internal_velocities(new)
+    got = np.array([tuple(b.velocity) for b in scene.granule_bodies])
+    np.testing.assert_array_equal(got, new)  # bit for bit, in spec order
+    after = _loop(stepped)
+    np.testing.assert_array_equal(after.positions, before.positions)
+    np.testing.assert_array_equal(after.angular_velocities, before.angular_velocities)
+    assert _others(scene) == others  # rotor, hammers, static body: every field unchanged
+    writer.write_internal_velocities(v)  # restore the module fixture
+    _assert_same(_loop(stepped), before)
+
+
+def test_writer_survives_reordering() -> None:
+    sim = Simulation(build_scene(_spec(n_rings=2)))
+    writer = GranuleWriter(sim.scene)
+    free = sim.scene.hammer_bodies[-1]
+    sim.scene.space.remove(free, *free.shapes)
+    assert sim.scene.space.static_body is not None
+    sim.run(2e-4)
+    others = _others(sim.scene)
+    new = np.arange(2.0 * writer.count).reshape(-1, 2)
+    writer.write_internal_velocities(new)
+    np.testing.assert_array_equal([tuple(b.velocity) for b in sim.scene.granule_bodies], new)
+    assert _others(sim.scene) == others
+
+
+def test_writer_rejects_bad_velocities() -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    before = _everything(scene)
+    v, _ = writer.read_internal(positions=False)
+    with pytest.raises(ValueError, match="shape"):
+        writer.write_internal_velocities(v[:-1])
+    with pytest.raises(ValueError, match="shape"):
+        writer.write_internal_velocities(v.ravel())
+    v[2, 1] = np.nan
+    with pytest.raises(ValueError, match=r"non-finite velocities for granules \[2\]"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+def test_writer_granule_missing_from_space_is_an_error() -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    v, _ = writer.read_internal(positions=False)
+    body = scene.granule_bodies[3]
+    scene.space.remove(body, *body.shapes)
+    before = _everything(scene)
+    with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    scene = build_scene(_spec(n_rings=1))
+    writer = GranuleWriter(scene)
+    v, _ = writer.read_internal(positions=False)
+    real = state_module.pb.get_space_bodies
+
+    def short(space: pymunk.Space, fields: object, buffer: object) -> None:
+        real(space, fields, buffer)
+        buffer._float_arr.num -= 1
+
+    monkeypatch.setattr(state_module.pb, "get_space_bodies", short)
+    before = _everything(scene)
+    with pytest.raises(RuntimeError, match="expected 2 per body"):
+        writer.write_internal_velocities(v)
+    assert _everything(scene) == before
+
+
+@pytest.mark.parametrize("fault", ["no-op", "shifted"])
+def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: str) -> None:
+    """A set_space_bodies that writes nothing, or writes every body's row one body later (as a
+    changed layout would), fails the writer's construction check."""
+    scene = build_scene(_spec(n_rings=1))
+    real = state_module.pb.set_space_bodies
+
+    def faulty(space: pymunk.Space, fields: object, buffer: pymunk.batch.Buffer) -> None:
+        if fault == "shifted":
+            floats = np.frombuffer(buffer.float_buf(), dtype=np.float64)
+            floats[:] = np.roll(floats, 2)
+            real(space, fields, buffer)
+
+    monkeypatch.setattr(state_module.pb, "set_space_bodies", faulty)
+    with pytest.raises(RuntimeError, match="set_space_bodies check failed"):
+        GranuleWriter(scene)
+
+
+def test_writer_no_granules() -> None:
+    spec = SceneSpec(
+        rotor=RotorSpec(omega=10.0, radius=0.1), hammers=(), granules=(), contacts=(), dt=1e-5
+    )
+    scene = build_scene(spec)
+    writer = GranuleWriter(scene)
+    v, p = writer.read_internal(positions=True)
+    assert v.shape == (0, 2) and p is not None and p.shape == (0, 2)
+    writer.write_internal_velocities(np.zeros((0, 2)))

@@ -1,0 +1,1 @@
+"""Tests of the soft-granule kernel (perga.contact.soft)."""

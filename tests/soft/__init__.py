@@ -1,1 +1,0 @@
-"""Tests of the soft-granule kernel (perga.soft)."""
