@@ -1,4 +1,5 @@
-"""Cost of reading granule state: ``perga.contact.rigid.batch.GranuleReader`` (pymunk.batch) against the
+"""Cost of reading granule state: ``perga.contact.rigid.batch.GranuleReader`` (pymunk.batch)
+against the
 per-body Python loop of ``Simulation.granule_positions`` & co.
 
 Scene: the one of ``engine_vs_pymunk.py`` (rotor, 6 hinged hammers, chamber), after 20 steps so

@@ -16,8 +16,8 @@ from perga.case import CaseError, load_case
 from perga.cli import main
 from perga.contact.soft.machine import MachinePolygons
 from perga.contact.soft.model import SoftSimulation
-from perga.contact.soft.polygons import CORNER, SMOOTH_JOINT
 from perga.engine import ContactSpec, GranuleSpec, RotorSpec, SceneSpec, Simulation, build_scene
+from perga.geometry.disc_polygon import CORNER, SMOOTH_JOINT
 from perga.geometry.outline import read_outline
 from perga.geometry.polygon import signed_area
 from perga.geometry.units import GeometryError

@@ -19,8 +19,8 @@ import pytest
 import pyvista as pv
 
 from perga.case import load_case
-from perga.contact.soft import polygons as pg
 from perga.contact.soft.model import SoftSimulation
+from perga.contact.soft.polygon_set import HIST_ACTIVE
 from perga.engine import ContactSpec, Simulation, build_scene
 from perga.engine import units as u
 from perga.model.from_case import scene_spec
@@ -110,7 +110,7 @@ def soft_expected(sim: SoftSimulation) -> dict[str, np.ndarray]:
             overlap[i] = max(overlap[i], wall)
         polys = g.polygons
         for k in range(polys.n_poly):
-            if g.polygon_hist[i, k, pg.HIST_ACTIVE]:
+            if g.polygon_hist[i, k, HIST_ACTIVE]:
                 verts = polys.vertices[polys.start[k] : polys.start[k + 1]]
                 contacts[i] += 1
                 overlap[i] = max(overlap[i], g.r[i] - point_polygon_distance(g.x[i], verts))

@@ -5,8 +5,8 @@ Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpe
 Effects that act on granule velocities (floor friction, air drag) are *kicks*: array operations
 on all granules at once, with no per-granule Python. Once per step, **before** Chipmunk's
 ``space.step`` (:meth:`Effect.before_step`, called by :meth:`~perga.engine.simulation.
-Simulation.step`), one :class:`~perga.contact.rigid.batch.GranuleWriter` reads every granule's velocity
-(and position, for the co-rotating floor) in one ``pymunk.batch`` pass, every listed kick
+Simulation.step`), one :class:`~perga.contact.rigid.batch.GranuleWriter` reads every granule's
+velocity (and position, for the co-rotating floor) in one ``pymunk.batch`` pass, every listed kick
 changes the velocity arrays in registry order, each a velocity change over dt that never
 reverses the velocity it opposes, and one batch write sets them (every other body keeps its
 velocity bit for bit). The granules keep Chipmunk's default velocity function (gravity).

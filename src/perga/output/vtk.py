@@ -52,10 +52,11 @@ import pymunk
 import pyvista as pv
 from numpy.typing import NDArray
 
-from perga.contact.soft import polygons as pg
 from perga.contact.soft.model import SoftSimulation
+from perga.contact.soft.polygon_set import HIST_ACTIVE
 from perga.engine import units as u
 from perga.engine.simulation import FloatArray, Simulation
+from perga.geometry.disc_polygon import closest_feature
 from perga.geometry.polygon import outline_or_circle
 from perga.model.spec import RotorSpec
 from perga.output import vtk3d
@@ -141,11 +142,11 @@ def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
     count += np.count_nonzero(walls > 0.0, axis=1)
     if walls.size:
         np.maximum(overlap, walls.max(axis=1), out=overlap)
-    active = g.polygon_hist[:, :, pg.HIST_ACTIVE] != 0.0
+    active = g.polygon_hist[:, :, HIST_ACTIVE] != 0.0
     count += np.count_nonzero(active, axis=1)
-    polys = g._poly[0].arrays()
+    polys = g._poly[0].outline()
     for a, k in np.argwhere(active):
-        d, _, _ = pg.closest_feature(g.x[a, 0], g.x[a, 1], polys, k)
+        d, _, _ = closest_feature(g.x[a, 0], g.x[a, 1], *polys, k)
         overlap[a] = max(overlap[a], g.r[a] - d)
     return count.astype(np.int32), overlap
 

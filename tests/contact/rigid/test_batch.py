@@ -1,5 +1,5 @@
-"""Batch state reads and velocity writes (perga.contact.rigid.batch) against per-body reads and writes
-in a Python loop.
+"""Batch state reads and velocity writes (perga.contact.rigid.batch) against per-body reads and
+writes in a Python loop.
 
 Tolerance: exact. The reader multiplies the very float64 values Chipmunk holds by the same unit
 factor as the reference, so any difference would be a wrong row or column, not rounding; the
@@ -15,6 +15,7 @@ import pymunk
 import pytest
 from tests.engine.helpers import plate
 
+from perga.contact.rigid import batch as state_module
 from perga.contact.rigid.batch import GranuleReader, GranuleState, GranuleWriter, granule_state
 from perga.engine import (
     ContactSpec,
@@ -26,7 +27,6 @@ from perga.engine import (
     Simulation,
     build_scene,
 )
-from perga.contact.rigid import batch as state_module
 from perga.engine import units as u
 
 OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s

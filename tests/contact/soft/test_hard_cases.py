@@ -1,4 +1,5 @@
-"""Hard cases of the soft kernel (SoftGranules, perga.contact.soft.polygons): stable, or refused.
+"""Hard cases of the soft kernel (SoftGranules, perga.contact.soft.polygon_forces): stable, or
+refused.
 
 The issue's list at kernel level, each either refused up front with a clear message or run and
 checked for: finite states, no granule outside the chamber or through a plate, restitution as
@@ -29,7 +30,14 @@ from perga.analytic.contact import (
     tunnelling_time_step,
 )
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, plane, uniform_table
-from perga.contact.soft import polygons as pg
+from perga.contact.soft.polygon_set import (
+    FREE,
+    HIST_ACTIVE,
+    KINEMATIC,
+    PINNED,
+    contact_table,
+    polygon_set,
+)
 
 from .helpers import chamber_gas, impact
 
@@ -55,7 +63,7 @@ def test_low_restitution_with_force_end_is_refused(e):
     for make in (
         lambda: contact_parameters("linear", e, k_n=K_N, end="force"),
         lambda: contact_parameters("hertz", e, k_n=1e9),  # end="force" is the default
-        lambda: pg.contact_table(K_N, 0.3 * K_N, e, 0.5),
+        lambda: contact_table(K_N, 0.3 * K_N, e, 0.5),
     ):
         with pytest.raises(ValueError) as info:
             make()
@@ -238,13 +246,13 @@ def test_kinematic_plate_at_3000_rpm_strikes_granules(e):
     )
     for f in F_VALUES:
         vertices, com, velocity = _plate_pose(0.0)
-        plate = pg.polygon_set(
-            [vertices], com[None], kind=[pg.KINEMATIC], velocity=velocity[None], omega=[OMEGA]
+        plate = polygon_set(
+            [vertices], com[None], kind=[KINEMATIC], velocity=velocity[None], omega=[OMEGA]
         )
         g = SoftGranules(
             x0, np.full(n, RADIUS), np.full(n, MASS),
             uniform_table(contact_parameters("linear", e, k_n=K_N, friction=f)), dt=steps.dt,
-            polygons=plate, polygon_table=pg.contact_table(K_N, 2.0 / 7.0 * K_N, e, f),
+            polygons=plate, polygon_table=contact_table(K_N, 2.0 / 7.0 * K_N, e, f),
         )  # fmt: skip
         active = np.zeros(n, bool)
         strikes = np.zeros(n, int)
@@ -257,7 +265,7 @@ def test_kinematic_plate_at_3000_rpm_strikes_granules(e):
             local = g.x @ _rotation(OMEGA * g.time)  # plate frame
             on_face = (local[:, 0] >= 0.10) & (local[:, 0] <= 0.18)
             lowest = min(lowest, local[on_face, 1].min(initial=np.inf))
-            now = g.polygon_hist[:, 0, pg.HIST_ACTIVE] != 0.0
+            now = g.polygon_hist[:, 0, HIST_ACTIVE] != 0.0
             strikes += now & ~active
             ended = active & ~now & np.isnan(first)
             first[ended] = np.linalg.norm(g.v[ended], axis=1)
@@ -291,20 +299,20 @@ class Hammer:
         self.kind = kind
         self.inertia_c = HAMMER_MASS * (0.08**2 + 0.006**2) / 12.0  # about the centre, kg·m²
         self.pivot = np.array([-0.04, 0.0])
-        self.inertia = self.inertia_c + (HAMMER_MASS * 0.04**2 if kind == pg.PINNED else 0.0)
+        self.inertia = self.inertia_c + (HAMMER_MASS * 0.04**2 if kind == PINNED else 0.0)
         self.com = np.zeros(2)
         self.angle = 0.0
         self.velocity = np.zeros(2)
         self.omega = 0.0
         vertices, com, velocity = self.pose()
-        self.set = pg.polygon_set(
+        self.set = polygon_set(
             [vertices], com[None], kind=[kind], mass=[HAMMER_MASS], inertia=[self.inertia],
             pivot=self.pivot[None], velocity=velocity[None], omega=[0.0],
         )  # fmt: skip
 
     def pose(self):
         rot = _rotation(self.angle)
-        if self.kind == pg.PINNED:
+        if self.kind == PINNED:
             com = self.pivot + rot @ -self.pivot
             arm = com - self.pivot
             velocity = self.omega * np.array([-arm[1], arm[0]])
@@ -314,7 +322,7 @@ class Hammer:
 
     def advance(self, dt: float) -> None:
         force, torque = self.set.force[0], self.set.torque[0]
-        if self.kind == pg.FREE:
+        if self.kind == FREE:
             self.velocity = self.velocity + force / HAMMER_MASS * dt
             self.com = self.com + self.velocity * dt
             self.omega += torque / self.inertia * dt
@@ -330,7 +338,7 @@ class Hammer:
         return velocity + self.omega * np.array([-(p - com)[1], (p - com)[0]])
 
     def kinetic_energy(self) -> float:
-        if self.kind == pg.FREE:
+        if self.kind == FREE:
             return (
                 0.5 * HAMMER_MASS * self.velocity @ self.velocity
                 + 0.5 * self.inertia * self.omega**2
@@ -338,7 +346,7 @@ class Hammer:
         return 0.5 * self.inertia * self.omega**2
 
 
-@pytest.mark.parametrize("kind", [pg.FREE, pg.PINNED], ids=["free", "pinned"])
+@pytest.mark.parametrize("kind", [FREE, PINNED], ids=["free", "pinned"])
 @pytest.mark.parametrize("e", [0.3, 0.7, 1.0])
 def test_mass_ratio_1_to_20000(kind, e):
     """A 0.1 g granule hits a 2 kg plate (FREE, or PINNED at one end and hit 30 mm from its free
@@ -354,9 +362,9 @@ def test_mass_ratio_1_to_20000(kind, e):
     no NaN, and the pair loses energy (e < 1; friction: −1.7 % at e = 1) or keeps it within 4.1e-4.
     """
     hammer = Hammer(kind)
-    table = pg.contact_table(K_N, 2.0 / 7.0 * K_N, e, 0.5)
+    table = contact_table(K_N, 2.0 / 7.0 * K_N, e, 0.5)
     soft = contact_parameters("linear", 1.0, k_n=1e-3 * K_N, friction=0.0)
-    hit = np.array([0.01 if kind == pg.PINNED else 0.0, 0.003 + RADIUS])
+    hit = np.array([0.01 if kind == PINNED else 0.0, 0.003 + RADIUS])
     v0, angle = 30.0, math.radians(30.0)
     v = np.array([v0 * math.sin(angle), -v0 * math.cos(angle)])
     g = SoftGranules(
@@ -364,7 +372,7 @@ def test_mass_ratio_1_to_20000(kind, e):
         polygons=hammer.set, polygon_table=table,
     )  # fmt: skip
     rho = math.hypot(0.04, 0.003)  # bounding radius about the centre of mass, m
-    if kind == pg.FREE:  # most yielding point: arm rho (an upper bound on any contact's arm)
+    if kind == FREE:  # most yielding point: arm rho (an upper bound on any contact's arm)
         inv_mp = 1.0 / HAMMER_MASS + rho**2 / hammer.inertia
     else:
         inv_mp = (rho + 0.04) ** 2 / hammer.inertia
@@ -382,7 +390,7 @@ def test_mass_ratio_1_to_20000(kind, e):
         g.step(1)
         hammer.advance(g.dt)
         assert np.all(np.isfinite(g.x)) and np.isfinite(hammer.omega)
-        active = g.polygon_hist[0, 0, pg.HIST_ACTIVE] != 0.0
+        active = g.polygon_hist[0, 0, HIST_ACTIVE] != 0.0
         touched |= active
         if touched and not active:
             break

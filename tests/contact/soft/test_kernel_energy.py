@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
-from perga.contact.soft.polygons import FREE, KINEMATIC, PINNED, contact_table
+from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, contact_table
 
 from .test_polygons import Body, _hexagon
 

@@ -11,7 +11,7 @@ import pytest
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
 from perga.contact.soft.kernel import DISSIPATED_PAIRS, DISSIPATED_POLYGONS
-from perga.contact.soft.polygons import (
+from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
     HIST_DISSIPATED,
@@ -19,10 +19,10 @@ from perga.contact.soft.polygons import (
     HIST_TANGENTIAL_IMPULSE,
     KINEMATIC,
     PINNED,
-    closest_feature,
     contact_table,
     polygon_set,
 )
+from perga.geometry.disc_polygon import closest_feature
 
 from .test_polygons import (
     I_DISC,
@@ -270,8 +270,8 @@ def test_tangential_impulse_of_a_sliding_hit():
 
 def _distance(point, vertices):
     """Distance of ``point`` from the convex polygon ``vertices`` (< 0 inside), m."""
-    arrays = polygon_set([vertices], np.zeros((1, 2)), kind=[KINEMATIC]).arrays()
-    return closest_feature(point[0], point[1], arrays, 0)[0]
+    arrays = polygon_set([vertices], np.zeros((1, 2)), kind=[KINEMATIC]).outline()
+    return closest_feature(point[0], point[1], *arrays, 0)[0]
 
 
 def _lattice(x0, x1, y0, y1, pitch):
@@ -310,7 +310,7 @@ def test_every_overlap_is_a_contact_with_a_fast_polygon():
     checked = 0
     for _ in range(100):
         g.step(40)
-        d = np.array([closest_feature(p[0], p[1], polys.arrays(), 0)[0] for p in g.x])
+        d = np.array([closest_feature(p[0], p[1], *polys.outline(), 0)[0] for p in g.x])
         approach = dt * (np.hypot(*g.v.T) + speed + abs(omega) * rho)
         deep = R - d > approach
         assert np.all(g.polygon_hist[deep, 0, HIST_ACTIVE] == 1.0)

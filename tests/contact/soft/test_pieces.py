@@ -1,5 +1,5 @@
 """A body of several convex pieces (an L-shaped plate split by the decomposition) against
-discs: only its outline makes contacts (``perga.contact.soft.polygons.piece_features``).
+discs: only its outline makes contacts (``perga.geometry.pieces.piece_features``).
 
 References: a convex square with the same corner, hit the same way, gives the same forces at
 the same times, so the two runs agree to round-off (1e-12 relative asserted; the arithmetic
@@ -16,8 +16,9 @@ import math
 import numpy as np
 import pytest
 
-from perga.contact.soft.polygons import HIST_ACTIVE, KINEMATIC, piece_features, polygon_set
+from perga.contact.soft.polygon_set import HIST_ACTIVE, KINEMATIC, polygon_set
 from perga.geometry.convex import decompose
+from perga.geometry.pieces import piece_features
 
 from .test_kernel_polygons import _granules, _linear
 from .test_polygons import R

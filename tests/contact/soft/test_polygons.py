@@ -1,4 +1,5 @@
-"""Granule-polygon soft contacts (perga.contact.soft.polygons): geometry, restitution, conservation."""
+"""Granule-polygon soft contacts (perga.contact.soft.polygon_forces): geometry, restitution,
+conservation."""
 
 import math
 
@@ -8,7 +9,8 @@ import pytest
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
-from perga.contact.soft.polygons import (
+from perga.contact.soft.polygon_forces import contact_energy, polygon_contacts
+from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
     HIST_COLUMNS,
@@ -20,9 +22,7 @@ from perga.contact.soft.polygons import (
     HIST_XI,
     KINEMATIC,
     PINNED,
-    contact_energy,
     contact_table,
-    polygon_contacts,
     polygon_set,
 )
 

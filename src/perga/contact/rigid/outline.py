@@ -6,7 +6,7 @@ pieces it makes contacts that the hammer's outline does not have: with the seam 
 normals). Measured on an L-shaped welded hammer struck at its split corner along the corner's
 bisector: the granule left 8° off the bisector, against straight back from the square with
 that corner. ``OutlineFilter`` gives every Chipmunk contact of such a hammer, in ``pre_solve``,
-the contact of the soft kernel's rule (:func:`perga.contact.soft.polygons.closest_feature` over the
+the contact of the soft kernel's rule (:func:`perga.geometry.disc_polygon.closest_feature` over the
 piece's solid edges and owned corners): a piece whose feature is not the outline's, or that
 the granule does not overlap by the outline's rule, has no contact this step; the others get
 the outline's normal and depth. Scenes with convex hammers
@@ -20,15 +20,17 @@ from typing import Any
 import numpy as np
 import pymunk
 
-from perga.contact.soft.polygons import KINEMATIC, closest_feature, piece_features, polygon_set
+from perga.contact.soft.polygon_set import KINEMATIC, polygon_set
 from perga.engine import units as u
 from perga.engine.machine import Scene
+from perga.geometry.disc_polygon import closest_feature
+from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
 
 class OutlineFilter:
     """The pieces of the scene's multi-piece hammers in their bodies' frames (SI), with the
-    outline features of :func:`~perga.contact.soft.polygons.piece_features`."""
+    outline features of :func:`~perga.geometry.pieces.piece_features`."""
 
     def __init__(self, scene: Scene) -> None:
         self._piece: dict[pymunk.Shape, tuple[tuple[np.ndarray, ...], int]] = {}
@@ -43,7 +45,7 @@ class OutlineFilter:
                 kind=[KINEMATIC] * len(pieces),
                 features=piece_features(pieces, [loop]),
             )
-            arrays = polygons.arrays()
+            arrays = polygons.outline()
             for k, shape in enumerate(shapes):
                 self._piece[shape] = (arrays, k)
 
@@ -60,7 +62,7 @@ class OutlineFilter:
         body = hammer.body
         centre = granule.body.position
         x, y = body.world_to_local(centre) * u.LENGTH
-        d, nx, ny = closest_feature(x, y, *piece)
+        d, nx, ny = closest_feature(x, y, *piece[0], piece[1])
         d = d / u.LENGTH
         r = granule.radius
         if not d < r:  # not the outline's feature, or not touching it

@@ -1,9 +1,10 @@
 """SceneSpec -> the soft granules of a scene: arrays, contact tables, chamber wall, hammers.
 
 Materials: the granules' and the chamber's share the kernel's pair table (:mod:`perga.contact.soft.
-contacts`); the hammers' materials index the columns of the granule-polygon table
-(:mod:`perga.contact.soft.polygons`). Each pair's row is calibrated to the pair's restitution and uses
-its friction; the normal stiffness is the spec's k_n (linear, N/m) or, for Hertz, k_n·√R_eff
+laws`); the hammers' materials index the columns of the granule-polygon table
+(:mod:`perga.contact.soft.polygon_set`). Each pair's row is calibrated to the pair's
+restitution and uses its friction; the normal stiffness is the spec's k_n (linear, N/m) or,
+for Hertz, k_n·√R_eff
 with R_eff = r_a r_b/(r_a + r_b) between granules and r at the wall (the chamber's curvature,
 r/R_chamber ≈ 1 %, is neglected; polygons use r themselves). Pairs that never touch (wall-wall)
 get an inert placeholder row, which the kernel never reads.
@@ -16,7 +17,7 @@ import math
 import numpy as np
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, pair_table
-from perga.contact.soft.polygons import ContactTable, PolygonSet, contact_table
+from perga.contact.soft.polygon_set import ContactTable, PolygonSet, contact_table
 from perga.model.spec import SceneSpec
 
 
@@ -95,7 +96,7 @@ def soft_granules(
 ) -> SoftGranules:
     """The scene's granules as :class:`~perga.contact.soft.SoftGranules` at step ``spec.dt``, with a
     round chamber wall (the kernel's circle) and the ``polygons`` (hammers and a drawn wall: a
-    posed :class:`~perga.contact.soft.polygons.PolygonSet` whose ``mat`` indexes
+    posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose ``mat`` indexes
     ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
     materials = sorted({g.material for g in spec.granules})
     walls = []

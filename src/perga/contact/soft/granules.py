@@ -8,7 +8,6 @@ import numpy as np
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.contact.soft import kernel
-from perga.contact.soft import polygons as pg
 from perga.contact.soft.laws import (
     N_PARAMS,
     P_HERTZ,
@@ -17,6 +16,18 @@ from perga.contact.soft.laws import (
     contact_duration,
 )
 from perga.contact.soft.neighbours import build, default_skin, empty_list
+from perga.contact.soft.polygon_forces import contact_energy
+from perga.contact.soft.polygon_set import (
+    FREE,
+    HIST_COLUMNS,
+    LINEAR,
+    PINNED,
+    ContactTable,
+    PolygonSet,
+    check_materials,
+    no_polygons,
+)
+from perga.geometry.disc_polygon import bounding_radii
 
 DEFAULT_DT_FRACTION = 1.0 / 50.0
 """Default step as a fraction of the shortest contact duration (MercuryDPM convention)."""
@@ -53,7 +64,8 @@ class SoftGranules:
     shortest contact duration, Hertz evaluated at approach speed v_max, m/s); skin: Verlet skin,
     m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's).
     polygons, polygon_table: convex rigid bodies (hammers) and the granule-polygon contact table
-    (``perga.contact.soft.polygons``), both or neither; the granules' ``mat`` indexes the table's rows.
+    (``perga.contact.soft.polygon_set``), both or neither; the granules' ``mat`` indexes the
+    table's rows.
     pairs: False leaves granule-granule contacts out entirely (no neighbour list, no pair loop:
     granules pass through each other, as in a scene without granule collisions).
 
@@ -82,8 +94,8 @@ class SoftGranules:
         v_max: float = 30.0,
         skin: float | None = None,
         threads: int | None = None,
-        polygons: pg.PolygonSet | None = None,
-        polygon_table: pg.ContactTable | None = None,
+        polygons: PolygonSet | None = None,
+        polygon_table: ContactTable | None = None,
         pairs: bool = True,
     ) -> None:
         self.x = _f64(x, np.shape(x))
@@ -119,9 +131,9 @@ class SoftGranules:
         self.polygons = polygons
         self.polygon_table = polygon_table
         if polygons is not None and polygon_table is not None:
-            pg.check_materials(self.mat, polygons, polygon_table)
-        self._no_polygons = pg.no_polygons()
-        self.polygon_hist = np.zeros((n, self._poly[0].n_poly, pg.HIST_COLUMNS))
+            check_materials(self.mat, polygons, polygon_table)
+        self._no_polygons = no_polygons()
+        self.polygon_hist = np.zeros((n, self._poly[0].n_poly, HIST_COLUMNS))
         self.dissipated = np.zeros(3)
         self.pairs = bool(pairs)
         self.gravity = _f64(gravity, (2,))
@@ -141,7 +153,7 @@ class SoftGranules:
         self.n_rebuilds = 0
 
     @property
-    def _poly(self) -> tuple[pg.PolygonSet, pg.ContactTable]:
+    def _poly(self) -> tuple[PolygonSet, ContactTable]:
         """The polygons and their table, or empty ones."""
         if self.polygons is None or self.polygon_table is None:
             return self._no_polygons
@@ -185,12 +197,12 @@ class SoftGranules:
         (linear) or m_eff/√r (Hertz, t_c ∝ (m_eff/(k_n √r))^{2/5}).
         """
         polys, table = self._poly
-        rho = pg.bounding_radii(polys.vertices, polys.start, polys.com)
+        rho = bounding_radii(polys.vertices, polys.start, polys.com)
         out = []
         for k in range(polys.n_poly):
-            if polys.kind[k] == pg.FREE:
+            if polys.kind[k] == FREE:
                 inv_mp = 1.0 / polys.mass[k] + rho[k] ** 2 / polys.inertia[k]
-            elif polys.kind[k] == pg.PINNED:
+            elif polys.kind[k] == PINNED:
                 arm = rho[k] + float(np.hypot(*(polys.pivot[k] - polys.com[k])))
                 inv_mp = arm**2 / polys.inertia[k]
             else:
@@ -199,7 +211,7 @@ class SoftGranules:
             for a in np.unique(self.mat):
                 b = int(polys.mat[k])
                 mine = self.mat == a
-                if table.law[a, b] == pg.LINEAR:
+                if table.law[a, b] == LINEAR:
                     m_min = float(m_eff[mine].min())
                     contact = LinearSpringDashpot(
                         table.k_n[a, b], table.damping[a, b], m_min, "force"
@@ -234,7 +246,7 @@ class SoftGranules:
         if n_steps <= 0:
             return
         polys, table = self._poly
-        if self.polygon_hist.shape != (self.n, polys.n_poly, pg.HIST_COLUMNS):
+        if self.polygon_hist.shape != (self.n, polys.n_poly, HIST_COLUMNS):
             raise ValueError("polygon_hist does not match the granules and polygons")
         previous = numba.get_num_threads()
         numba.set_num_threads(self.threads)
@@ -357,7 +369,7 @@ class SoftGranules:
         """Elastic energy stored in the granule-polygon contacts at the polygons' current pose, J
         (``polygons.contact_energy``; after ``step`` that pose is at the granules' time)."""
         polys, table = self._poly
-        return pg.contact_energy(
+        return contact_energy(
             self.x, self.r, self.mat, polys, table, self.polygon_hist, normal, tangential
         )
 

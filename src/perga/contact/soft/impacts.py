@@ -19,13 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from perga.contact.soft import SoftGranules
-from perga.contact.soft.polygons import (
-    HIST_ACTIVE,
-    HIST_DISSIPATED,
-    HIST_NORMAL_IMPULSE,
-    closest_feature,
-)
+from perga.contact.soft.polygon_set import HIST_ACTIVE, HIST_DISSIPATED, HIST_NORMAL_IMPULSE
 from perga.engine.simulation import HammerState, Impact
+from perga.geometry.disc_polygon import closest_feature
 
 
 @dataclass(frozen=True)
@@ -111,11 +107,12 @@ class SoftImpactLog:
         self._active = active
 
     def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
-        before = (self._vertices, *self._g.polygons.arrays()[1:])
-        d, nx, ny = closest_feature(self._x[i, 0], self._x[i, 1], before, k)
+        p = self._g.polygons
+        d, nx, ny = closest_feature(
+            self._x[i, 0], self._x[i, 1], self._vertices, p.start, p.solid, p.corner, k
+        )
         if not math.isfinite(d):  # before the call the centre faced another piece's feature
-            now = self._g.polygons.arrays()
-            _, nx, ny = closest_feature(self._g.x[i, 0], self._g.x[i, 1], now, k)
+            _, nx, ny = closest_feature(self._g.x[i, 0], self._g.x[i, 1], *p.outline(), k)
         n = (float(nx), float(ny))
         vn, vt, point = self._relative(
             i, k, self._x[i], self._v[i], float(self._w[i]), n, self._com[k]

@@ -20,7 +20,8 @@ energy (design §8: e = 1.18 at t_c/10); this scheme is stable to about dt = t_c
 t_c/50 by default. Optional global drag (1/s, implicit: v ← v/(1 + drag·dt)) and a speed cap
 v_cap (m/s) serve ``SoftGranules.relax`` only; normal runs have drag = 0, v_cap = inf.
 
-Polygons (hammers, ``perga.contact.soft.polygons``): ``poly`` = ``PolygonSet.arrays()``, ``table`` =
+Polygons (hammers, ``perga.contact.soft.polygon_forces``): ``poly`` = ``PolygonSet.arrays()``,
+``table`` =
 ``ContactTable.arrays()``, ``loads`` = ``PolygonSet.loads()``, history ``phist`` (n, n_poly,
 ``HIST_COLUMNS``); empty arrays for none. During a call of n steps each polygon moves rigidly
 from its pose at the call's first force evaluation with its (fixed) velocities: at step j
@@ -47,9 +48,10 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from perga.contact.soft import polygons as pg
-from perga.contact.soft.laws import FASTMATH, contact_law, released, rolling_torque, touching
+from perga.contact.soft.laws import contact_law, released, rolling_torque, touching
 from perga.contact.soft.neighbours import build
+from perga.contact.soft.polygon_forces import add_loads, candidates, polygon_contact, pose
+from perga.geometry.disc_polygon import FASTMATH, bounding_radii
 
 WALL_CHAMBER = 0
 WALL_PLANE = 1
@@ -277,7 +279,7 @@ def _integrate(
                 fy += acc[q, i, 1]
                 t += acc[q, i, 2]
             for e in range(cstart[i], cstart[i + 1]):
-                _, px, py, ti, tk, de = pg.polygon_contact(
+                _, px, py, ti, tk, de = polygon_contact(
                     i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
                 )
                 fx += px
@@ -369,7 +371,7 @@ def advance(
     verts0 = poly[0].copy()
     com0 = poly[2].copy()
     pivot0 = poly[8].copy()
-    rho = pg.bounding_radii(poly[0], poly[1], poly[2])
+    rho = bounding_radii(poly[0], poly[1], poly[2])
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
@@ -390,10 +392,10 @@ def advance(
             fresh = False
         if n_poly > 0:
             if step > 0:
-                pg.pose(verts0, com0, pivot0, poly, step * dt)
+                pose(verts0, com0, pivot0, poly, step * dt)
             if not fresh:
                 span = (n_steps - 1 - step) * dt
-                cstart, cpoly = pg.candidates(x_ref, r, poly, rho, phist, span, skin, dt)
+                cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 ploads = np.zeros((cpoly.shape[0], 4))
                 fresh = True
         if pairs:
@@ -430,7 +432,7 @@ def advance(
             chunk,
         )
         if n_poly > 0:
-            dissipated[DISSIPATED_POLYGONS] += pg.add_loads(
+            dissipated[DISSIPATED_POLYGONS] += add_loads(
                 cpoly, ploads, poly[2], force, torque, moment
             )
         dmax = 0.0
@@ -442,7 +444,7 @@ def advance(
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     if n_poly > 0 and n_steps > 0:
-        pg.pose(verts0, com0, pivot0, poly, n_steps * dt)
+        pose(verts0, com0, pivot0, poly, n_steps * dt)
         force /= n_steps
         torque /= n_steps
         moment /= n_steps

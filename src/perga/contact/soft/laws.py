@@ -47,10 +47,7 @@ from perga.analytic.contact import (
     damping_ratio,
     tsuji_alpha,
 )
-
-FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
-"""LLVM fast-math flags of the kernels: all but ``nnan`` and ``ninf`` (an infinite speed cap and
-NaN checks must keep their meaning). Measured ~1.7× faster than strict IEEE on the dense bed."""
+from perga.geometry.disc_polygon import FASTMATH
 
 P_KN, P_DAMP, P_KT, P_DAMPT, P_MU, P_MUR, P_HERTZ, P_CLAMP = range(8)
 N_PARAMS = 8
@@ -83,7 +80,8 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     """The soft contact law itself, from explicit coefficients (one row of the table, resolved).
 
     The single implementation of the normal and tangential law shared by granule pairs, walls
-    (through ``contact_law``) and granule-polygon contacts (``perga.contact.soft.polygons``, whose
+    (through ``contact_law``) and granule-polygon contacts
+    (``perga.contact.soft.polygon_forces``, whose
     stiffness depends on the granule's radius under Hertz and so cannot come from the table).
     kn: normal stiffness, N/m (linear) or N/m^{3/2} (hertz != 0); damp: dimensionless damping D
     (2ζ linear, α Hertz-Tsuji); clamp != 0: F_n ≥ 0 (end="force"); kt: tangential stiffness at

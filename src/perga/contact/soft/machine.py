@@ -1,8 +1,9 @@
 """The machine as soft-contact polygons: the hammers posed from their Pymunk bodies and loaded
 back onto them, and a chamber wall drawn from a file (a round wall is the kernel's own circle).
 
-Each convex piece of each hammer becomes one polygon of a :class:`~perga.contact.soft.polygons.PolygonSet`
-(SI), described relative to its body's centre of gravity. How a hammer resists a contact sets
+Each convex piece of each hammer becomes one polygon of a
+:class:`~perga.contact.soft.polygon_set.PolygonSet` (SI), described relative to its body's
+centre of gravity. How a hammer resists a contact sets
 the contact's effective mass: a hinged hammer is ``PINNED`` at its hinge with I_A; a welded one
 is part of the rotor, ``KINEMATIC`` on a rotor held at ω or ``PINNED`` at the axis with the
 rotor's moment on a driven rotor; a free one is ``FREE`` with M and I_C. The wall's pieces
@@ -26,16 +27,10 @@ import math
 import numpy as np
 import pymunk
 
-from perga.contact.soft.polygons import (
-    FREE,
-    KINEMATIC,
-    PINNED,
-    PolygonSet,
-    piece_features,
-    polygon_set,
-)
+from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
 from perga.engine import units as u
 from perga.engine.machine import Scene, chamber_inner_outline, chamber_pieces
+from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
 TORQUE = u.FORCE * u.LENGTH
@@ -47,7 +42,7 @@ class MachinePolygons:
     every convex piece of every hammer is a polygon, ``hammer_of[k]`` the hammer polygon k
     belongs to (−1 for the wall's pieces, which follow); pieces of one hammer share its body's
     motion and inertia, and only the hammer's outline makes contacts
-    (``perga.contact.soft.polygons.piece_features``).
+    (``perga.geometry.pieces.piece_features``).
 
     ``materials`` lists the polygons' material names (the polygon table's columns).
     """

@@ -1,0 +1,449 @@
+"""Soft contacts between granules (discs) and convex polygons (:mod:`perga.contact.soft.
+polygon_set`), compiled (numba), SI units.
+
+Two ways in: ``polygon_contacts`` evaluates all contacts once at the given poses (one force
+evaluation, loads added to ``PolygonSet.force``/``torque``/``moment``); ``SoftGranules`` with
+polygons evaluates them inside its compiled step (``kernel.advance``), moving each polygon
+rigidly with its velocities during a call (``pose``) and returning the mean loads. Both call
+``polygon_contact``, the one implementation of a granule-polygon contact.
+
+Contact geometry: the closest solid feature of the polygon (an edge or an owned corner) to the
+disc centre (:func:`perga.geometry.disc_polygon.closest_feature`): outside, the normal from the
+closest boundary point; inside, the outward normal of the edge of deepest penetration, overlap
+δ = r − s. The force acts at the middle of the overlap, p = x − (r − δ⁺/2) n (the disc's surface
+point while δ ≤ 0), with the contact's effective mass m_eff = 1/(1/m_i + 1/m_p).
+
+Contact law: ``perga.contact.soft.laws.contact_force``, the same law (and the same time
+discretisation and dissipation) as granule pairs and walls, clamped at zero (``end="force"``,
+the default of ``contact_table``) or not (``end="overlap"``: max(0, ·) below is dropped and the
+damping tuned for it):
+
+* ``LINEAR``: F_n = max(0, k_n δ + 2ζ√(k_n m_eff) δ̇), ζ = ``damping_ratio(e, end)``;
+  tangential stiffness k_t;
+* ``HERTZ``: F_n = max(0, k δ^{3/2} + α√(m_eff k) δ^{1/4} δ̇), k = k_n √r_i (k_n = (4/3) E*,
+  Pa, with R_eff = r_i for a flat face), α = ``tsuji_alpha(e, end)``; tangential stiffness
+  k_t √(r_i δ) (Mindlin-like, as the k_t = P_KT √δ of the granule table's Hertz rows).
+
+A contact is evaluated whenever ``laws.touching`` (δ > 0 somewhere in the kick interval
+[t − dt/2, t + dt/2], so possibly half a step before first touch), and the dashpot enters as its
+exact impulse over the overlapping part of that interval (see ``contact_force``). The approach
+and slip rates handed to the law are extrapolated to the force time: the caller's velocities are
+half a step old (kick, then drift), and a polygon's acceleration is not known here, so each rate
+u is extrapolated from its last two half-step values, 1.5 u_{n−1/2} − 0.5 u_{n−3/2} (u_{n−1/2}
+unchanged at the first evaluation of a contact, before any contact force acted; exact for a
+contact at rest). This equals u + ½ dt u̇ of the previous step, i.e. the granule kernel's
+extrapolation.
+
+Tangential force: Cundall-Strack spring F_t = −k_t ξ on the accumulated tangential displacement ξ
+(a scalar per (granule, polygon) pair in 2-D, along t = (−n_y, n_x)), capped at f·F_n (ξ is
+rescaled so that k_t|ξ| = f F_n while sliding), no tangential damping.
+
+Loads: the equal and opposite force on the polygon, its torque about the polygon's centre of
+mass and its moment about the world origin (the rotor axis). Both sides use the same force at
+the same point, so linear and angular momentum are conserved to round-off.
+
+Broad phase: a granule is skipped for a polygon when its centre is farther than r_i plus half a
+step's largest possible approach from the polygon's bounding circle (centre at the centre of mass,
+radius ``bounding_radii``: invariant under the polygon's rigid motion). The fused step also keeps
+a candidate list (``candidates``) so that granules far from every polygon cost nothing per step.
+Granules are processed in parallel; per-polygon sums are reduced in a fixed order, so the result
+does not depend on the number of threads.
+
+Limits: a disc whose centre crosses the middle of a thin polygon in one step is pushed out of the
+other side (tunnelling: see ``perga.analytic.contact.tunnelling_time_step``); rolling resistance
+is not modelled.
+"""
+
+import math
+
+import numba as nb
+import numpy as np
+
+from perga.contact.soft.laws import contact_force, touching
+from perga.contact.soft.polygon_set import (
+    FREE,
+    HIST_ACTIVE,
+    HIST_COLUMNS,
+    HIST_DISSIPATED,
+    HIST_NORMAL_IMPULSE,
+    HIST_RATE,
+    HIST_SLIP,
+    HIST_TANGENTIAL_IMPULSE,
+    HIST_XI,
+    LINEAR,
+    PINNED,
+    ContactTable,
+    PolygonSet,
+    check_materials,
+)
+from perga.geometry.disc_polygon import FASTMATH, bounding_radii, closest_feature, separation
+
+N_CHUNKS = 64
+"""Granules are split into this many chunks for the parallel loop (fixed: deterministic sums)."""
+
+
+@nb.njit(cache=True, fastmath=FASTMATH)
+def pose(verts0, com0, pivot0, poly, t):
+    """Pose the polygons ``poly`` (``PolygonSet.arrays()``) t seconds after the pose (verts0,
+    com0, pivot0) by rigid motion at their velocities: c(t) = c0 + v_c t, vertices and pivot
+    turned by ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
+    verts, start, com, vel, omega, _, _, _, pivot = poly[:9]
+    for k in range(com.shape[0]):
+        c = math.cos(omega[k] * t)
+        s = math.sin(omega[k] * t)
+        cx = com0[k, 0] + vel[k, 0] * t
+        cy = com0[k, 1] + vel[k, 1] * t
+        for q in range(start[k], start[k + 1]):
+            rx = verts0[q, 0] - com0[k, 0]
+            ry = verts0[q, 1] - com0[k, 1]
+            verts[q, 0] = cx + c * rx - s * ry
+            verts[q, 1] = cy + s * rx + c * ry
+        rx = pivot0[k, 0] - com0[k, 0]
+        ry = pivot0[k, 1] - com0[k, 1]
+        pivot[k, 0] = cx + c * rx - s * ry
+        pivot[k, 1] = cy + s * rx + c * ry
+        com[k, 0] = cx
+        com[k, 1] = cy
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def _end_contact(i, k, ri, mat, pmat, law, k_t, hist):
+    """Reset a pair that is not touching; returns the energy of a dropped tangential spring, J."""
+    if hist[i, k, HIST_ACTIVE] == 0.0:
+        return 0.0
+    xi = hist[i, k, HIST_XI]
+    released = 0.5 * k_t[mat[i], pmat[k]] * xi * xi if law[mat[i], pmat[k]] == LINEAR else 0.0
+    hist[i, k, HIST_XI] = 0.0
+    hist[i, k, HIST_ACTIVE] = 0.0
+    hist[i, k, HIST_RATE] = 0.0
+    hist[i, k, HIST_SLIP] = 0.0
+    hist[i, k, HIST_DISSIPATED] += released
+    return released
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
+    """Contact of granule i with polygon k over one step; updates hist[i, k] (module doc).
+
+    Granule arrays as in ``polygon_contacts``; poly: ``PolygonSet.arrays()`` at the step's pose;
+    table: ``ContactTable.arrays()``; rho: ``bounding_radii`` of the polygons. Returns
+    (evaluated, fx, fy, tq, tq_poly, dissipated): whether the contact was evaluated; force on the
+    granule, N (−it on the polygon); torque on the granule, N·m; torque on the polygon about its
+    centre of mass, N·m; energy dissipated over the step, J.
+    """
+    com, pvel, pomega, kind, pmass, pinertia, pivot, pmat = poly[2:10]
+    law, k_n, k_t, damping, friction, clamp = table
+    xi = x[i, 0]
+    yi = x[i, 1]
+    ri = r[i]
+    cx = xi - com[k, 0]
+    cy = yi - com[k, 1]
+    dist = math.sqrt(cx * cx + cy * cy)
+    reach = rho[k] + ri
+    # Skip when even the fastest approach cannot make it touch within the step:
+    # |rate| <= 1.5 |v_i - v_p| + 0.5 |last rate|, |v_p| <= |v_c| + |w| (dist + r_i).
+    if dist > reach:
+        bound = 1.5 * (
+            math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+            + math.sqrt(pvel[k, 0] * pvel[k, 0] + pvel[k, 1] * pvel[k, 1])
+            + abs(pomega[k]) * (dist + ri)
+        ) + 0.5 * abs(hist[i, k, HIST_RATE])
+        if dist - reach >= 0.5 * dt * bound:
+            return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, ri, mat, pmat, law, k_t, hist)
+    d, nx, ny = closest_feature(xi, yi, poly[0], poly[1], poly[10], poly[11], k)
+    delta = ri - d
+    # Contact point: middle of the overlap (the surface point before first touch); t = (-ny, nx).
+    arm = ri - 0.5 * max(delta, 0.0)
+    px = xi - arm * nx
+    py = yi - arm * ny
+    tx = -ny
+    ty = nx
+    # Relative velocity of the disc's material point to the polygon's at p.
+    rcx = px - com[k, 0]
+    rcy = py - com[k, 1]
+    vrx = v[i, 0] + w[i] * arm * ny - (pvel[k, 0] - pomega[k] * rcy)
+    vry = v[i, 1] - w[i] * arm * nx - (pvel[k, 1] + pomega[k] * rcx)
+    delta_dot = -(vrx * nx + vry * ny)
+    slip = vrx * tx + vry * ty
+    # Rates of the last half step; extrapolated to the force time from the previous ones (none
+    # at first touch: no contact force yet).
+    active = hist[i, k, HIST_ACTIVE] != 0.0
+    rate = 1.5 * delta_dot - 0.5 * hist[i, k, HIST_RATE] if active else delta_dot
+    vt = 1.5 * slip - 0.5 * hist[i, k, HIST_SLIP] if active else slip
+    if not touching(delta, rate, dt):
+        return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, ri, mat, pmat, law, k_t, hist)
+    if not active:  # a new contact: the previous one's totals are forgotten
+        hist[i, k, HIST_NORMAL_IMPULSE] = 0.0
+        hist[i, k, HIST_TANGENTIAL_IMPULSE] = 0.0
+        hist[i, k, HIST_DISSIPATED] = 0.0
+    kd = kind[k]
+    if kd == FREE:
+        cr = rcx * ny - rcy * nx
+        inv_mp = 1.0 / pmass[k] + cr * cr / pinertia[k]
+    elif kd == PINNED:
+        cr = (px - pivot[k, 0]) * ny - (py - pivot[k, 1]) * nx
+        inv_mp = cr * cr / pinertia[k]
+    else:
+        inv_mp = 0.0
+    m_eff = 1.0 / (1.0 / m[i] + inv_mp)
+    a = mat[i]
+    b = pmat[k]
+    if law[a, b] == LINEAR:
+        kn = k_n[a, b]
+        damp = 2.0 * damping[a, b]
+        hertz = 0.0
+        kt = k_t[a, b]
+    else:
+        kn = k_n[a, b] * math.sqrt(ri)
+        damp = damping[a, b]
+        hertz = 1.0
+        kt = k_t[a, b] * math.sqrt(ri * max(delta, 0.0))
+    fn, ft, xi_t, dissipated = contact_force(
+        kn, damp, hertz, clamp[a, b], kt, 0.0, friction[a, b],
+        delta, rate, vt, m_eff, hist[i, k, HIST_XI], dt,
+    )  # fmt: skip
+    hist[i, k, HIST_XI] = xi_t
+    hist[i, k, HIST_ACTIVE] = 1.0
+    hist[i, k, HIST_RATE] = delta_dot
+    hist[i, k, HIST_SLIP] = slip
+    hist[i, k, HIST_NORMAL_IMPULSE] += fn * dt
+    hist[i, k, HIST_TANGENTIAL_IMPULSE] += ft * dt
+    hist[i, k, HIST_DISSIPATED] += dissipated
+    fx = fn * nx + ft * tx
+    fy = fn * ny + ft * ty
+    return True, fx, fy, -arm * ft, -(rcx * fy - rcy * fx), dissipated
+
+
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _polygon_contacts(x, v, w, r, m, mat, poly, table, dt, hist, f, tq, loads):
+    """Compiled ``polygon_contacts`` (arrays unchecked); returns the number of contacts."""
+    com = poly[2]
+    force, torque, moment = loads
+    n = x.shape[0]
+    n_poly = com.shape[0]
+    rho = bounding_radii(poly[0], poly[1], com)
+    n_chunks = min(N_CHUNKS, max(n, 1))
+    part = np.zeros((n_chunks, n_poly, 3))
+    counts = np.zeros(n_chunks, dtype=np.int64)
+    for c in nb.prange(n_chunks):
+        for i in range(c * n // n_chunks, (c + 1) * n // n_chunks):
+            for k in range(n_poly):
+                hit, fx, fy, ti, tk, _ = polygon_contact(
+                    i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist
+                )
+                if hit:
+                    counts[c] += 1
+                    f[i, 0] += fx
+                    f[i, 1] += fy
+                    tq[i] += ti
+                    part[c, k, 0] -= fx
+                    part[c, k, 1] -= fy
+                    part[c, k, 2] += tk
+    for c in range(n_chunks):
+        for k in range(n_poly):
+            force[k, 0] += part[c, k, 0]
+            force[k, 1] += part[c, k, 1]
+            torque[k] += part[c, k, 2]
+            moment[k] += part[c, k, 2] + com[k, 0] * part[c, k, 1] - com[k, 1] * part[c, k, 0]
+    return counts.sum()
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
+    """Whether pair (i, k) goes in the candidate list: in contact, or (1 − ½ dt|ω|)(d − r_i) <
+    reach[k] (``candidates``), d the separation from the polygon's edge lines (a lower bound of
+    the distance, so that a piece whose features do not count here now is still listed);
+    slack[k] = 1 − ½ dt|ω_k|."""
+    if hist[i, k, HIST_ACTIVE] != 0.0 or slack[k] <= 0.0:
+        return True
+    px = x_ref[i, 0]
+    py = x_ref[i, 1]
+    limit = r[i] + reach[k] / slack[k]
+    dx = px - poly[2][k, 0]
+    dy = py - poly[2][k, 1]
+    if dx * dx + dy * dy >= (rho[k] + limit) ** 2:  # outside the bounding circle: cheap reject
+        return False
+    return separation(px, py, poly[0], poly[1][k], poly[1][k + 1]) < limit
+
+
+@nb.njit(cache=True, parallel=True)
+def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
+    """(granule, polygon) pairs the fused step evaluates over the next ``span`` s of a call, as
+    a CSR list (start (n + 1,) int64, polygon of each entry), sorted by granule then polygon.
+
+    poly: the polygons posed now (``PolygonSet.arrays()``); x_ref: granule positions at the
+    last neighbour-list build; skin: its skin, m. The kernel rebuilds that list when
+    2|x − x_ref| + dt|v| would exceed the skin, so at every step |x − x_ref| + ½ dt |v| ≤ ½ skin.
+    No point of polygon k moves faster than S = |v_c| + |ω| ρ, so within ``span`` the gap
+    g = d − r_i between a granule and it falls by at most S·span plus the granule's
+    displacement; a pair not in contact touches (``contacts.touching``, approach rate ≤
+    |v_i| + |v_c| + |ω|(ρ + g)) only if (1 − ½ dt|ω|) g < ½ dt (|v_i| + |v_c| + |ω| ρ). So with
+    g measured from x_ref to the polygon now, pairs with (1 − ½ dt|ω|) g ≥ ½ skin + S·span +
+    ½ dt (|v_c| + |ω| ρ) are left out. Pairs in contact (``HIST_ACTIVE``) are always in, so that
+    their end is evaluated.
+    """
+    n = x_ref.shape[0]
+    velocity, omega = poly[3], poly[4]
+    n_poly = omega.shape[0]
+    reach = np.empty(n_poly)
+    slack = np.empty(n_poly)
+    for k in range(n_poly):
+        top = math.sqrt(velocity[k, 0] ** 2 + velocity[k, 1] ** 2) + abs(omega[k]) * rho[k]
+        reach[k] = 0.5 * skin + top * (span + 0.5 * dt)
+        slack[k] = 1.0 - 0.5 * dt * abs(omega[k])
+    start = np.zeros(n + 1, np.int64)
+    for i in nb.prange(n):
+        for k in range(n_poly):
+            if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
+                start[i + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    cpoly = np.empty(start[n], np.int64)
+    for i in nb.prange(n):
+        q = start[i]
+        for k in range(n_poly):
+            if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
+                cpoly[q] = k
+                q += 1
+    return start, cpoly
+
+
+@nb.njit(cache=True)
+def add_loads(cpoly, ploads, com, force, torque, moment):
+    """Add one step's polygon loads to force (n_poly, 2), torque and moment (n_poly,) and return
+    the energy its contacts dissipated, J.
+
+    ploads (n_entries, 4): per candidate entry (force on the polygon x, y, torque about its
+    centre of mass, dissipated energy); summed in entry order (independent of the thread count);
+    moment = torque + com × force about the origin at this step's com.
+    """
+    n_poly = com.shape[0]
+    step = np.zeros((n_poly, 3))
+    dissipated = 0.0
+    for e in range(cpoly.shape[0]):
+        k = cpoly[e]
+        step[k, 0] += ploads[e, 0]
+        step[k, 1] += ploads[e, 1]
+        step[k, 2] += ploads[e, 2]
+        dissipated += ploads[e, 3]
+    for k in range(n_poly):
+        force[k, 0] += step[k, 0]
+        force[k, 1] += step[k, 1]
+        torque[k] += step[k, 2]
+        moment[k] += step[k, 2] + com[k, 0] * step[k, 1] - com[k, 1] * step[k, 0]
+    return dissipated
+
+
+@nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _contact_energy(x, r, mat, poly, table, hist, normal, tangential):
+    """Elastic energy in the granule-polygon contacts at the current poses, J (see
+    ``contact_energy``)."""
+    verts, start, com = poly[0], poly[1], poly[2]
+    pmat = poly[9]
+    law, k_n, k_t = table[0], table[1], table[2]
+    rho = bounding_radii(verts, start, com)
+    n = x.shape[0]
+    energy = np.zeros(n)
+    for i in nb.prange(n):
+        for k in range(com.shape[0]):
+            xi = hist[i, k, HIST_XI]
+            dist = math.sqrt((x[i, 0] - com[k, 0]) ** 2 + (x[i, 1] - com[k, 1]) ** 2)
+            if dist >= rho[k] + r[i] and xi == 0.0:
+                continue
+            d, _, _ = closest_feature(x[i, 0], x[i, 1], poly[0], poly[1], poly[10], poly[11], k)
+            delta = max(r[i] - d, 0.0)
+            a = mat[i]
+            b = pmat[k]
+            if law[a, b] == LINEAR:
+                spring = 0.5 * k_n[a, b] * delta * delta
+                kt = k_t[a, b]
+            else:
+                spring = 0.4 * k_n[a, b] * math.sqrt(r[i]) * delta * delta * math.sqrt(delta)
+                kt = k_t[a, b] * math.sqrt(r[i] * delta)
+            if normal:
+                energy[i] += spring
+            if tangential:
+                energy[i] += 0.5 * kt * xi * xi
+    return energy.sum()
+
+
+def _check(arrays: dict[str, tuple[np.ndarray, tuple[int, ...], type]]) -> None:
+    for name, (arr, shape, dtype) in arrays.items():
+        if arr.shape != shape or arr.dtype != dtype or not arr.flags.c_contiguous:
+            raise ValueError(
+                f"{name} must be C-contiguous {np.dtype(dtype).name} of shape {shape} "
+                f"(got {arr.dtype.name} {arr.shape})"
+            )
+
+
+def polygon_contacts(
+    x: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    r: np.ndarray,
+    m: np.ndarray,
+    mat: np.ndarray,
+    polygons: PolygonSet,
+    table: ContactTable,
+    dt: float,
+    history: np.ndarray,
+    f: np.ndarray,
+    tq: np.ndarray,
+) -> int:
+    """Accumulate granule-polygon contact forces once; return the number of contacts evaluated.
+
+    A contact counts while ``touching`` (module doc): from up to half a step before first touch
+    to the step after the force has returned to zero.
+
+    Granules: x, v (n, 2), w, r, m (n,), mat (n,) int32 (row of ``table``). dt: time step, s
+    (advances the tangential springs). history (n, n_poly, HIST_COLUMNS): contact history
+    (module doc), updated in place (start from zeros). Adds to f (n, 2), tq (n,) and to
+    ``polygons.force``, ``polygons.torque`` (about each centre of mass) and ``polygons.moment``
+    (about the origin). Layouts are checked here; the compiled kernel takes the same arrays
+    without checks.
+    """
+    n = x.shape[0]
+    n_poly = polygons.n_poly
+    _check(
+        {
+            "x": (x, (n, 2), np.float64),
+            "v": (v, (n, 2), np.float64),
+            "w": (w, (n,), np.float64),
+            "r": (r, (n,), np.float64),
+            "m": (m, (n,), np.float64),
+            "mat": (mat, (n,), np.int32),
+            "history": (history, (n, n_poly, HIST_COLUMNS), np.float64),
+            "f": (f, (n, 2), np.float64),
+            "tq": (tq, (n,), np.float64),
+        }
+    )
+    check_materials(mat, polygons, table)
+    if n == 0 or n_poly == 0:
+        return 0
+    count = _polygon_contacts(
+        x, v, w, r, m, mat, polygons.arrays(), table.arrays(), float(dt), history, f, tq,
+        polygons.loads(),
+    )  # fmt: skip
+    return int(count)
+
+
+def contact_energy(
+    x: np.ndarray,
+    r: np.ndarray,
+    mat: np.ndarray,
+    polygons: PolygonSet,
+    table: ContactTable,
+    history: np.ndarray,
+    normal: bool = True,
+    tangential: bool = True,
+) -> float:
+    """Elastic energy stored in the granule-polygon contacts at the polygons' current poses, J.
+
+    Normal (if ``normal``): k_n δ²/2 (LINEAR), 2 k δ^{5/2}/5 with k = k_n √r_i (HERTZ), over
+    every overlap δ > 0; tangential (if ``tangential``): k_t ξ²/2 with the k_t of the current
+    overlap (k_t √(r_i δ⁺) for HERTZ), ξ from ``history``. Arrays as in ``polygon_contacts``.
+    """
+    if x.shape[0] == 0 or polygons.n_poly == 0:
+        return 0.0
+    arrays = polygons.arrays(), table.arrays()
+    return float(_contact_energy(x, r, mat, *arrays, history, normal, tangential))
