@@ -252,43 +252,29 @@ class SoftGranules:
         numba.set_num_threads(self.threads)
         try:
             self.start, self.nbr, self.hist, rebuilt = kernel.advance(
-                int(n_steps),
-                self.x,
-                self.v,
-                self.w,
-                self.a_prev,
-                self.r,
-                self.m,
-                self.inertia,
-                self.mat,
-                self.params,
-                self.walls,
-                self.wall_hist,
-                polys.arrays(),
-                table.arrays(),
-                self.polygon_hist,
-                polys.loads(),
-                self.gravity,
-                self.dt,
-                self.skin,
-                self.start,
-                self.nbr,
-                self.hist,
-                self.x_ref,
-                self._acc,
-                self.f,
-                self.tq,
-                float(drag),
-                float(v_cap),
-                self._rebuild,
-                self.dissipated,
-                self.pairs,
+                *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap))
             )
         finally:
             numba.set_num_threads(previous)
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
         self.time += n_steps * self.dt
+
+    def _bundles(
+        self, polys: PolygonSet, table: ContactTable, n_steps: int, drag: float, v_cap: float
+    ) -> tuple:
+        """The arguments of ``kernel.advance``: its bundles as plain tuples in their fields'
+        order (``kernel.advance`` doc: a plain tuple costs less to pass than a named one)."""
+        return (
+            (n_steps, self.dt, self.gravity, self.skin, drag, v_cap, self.pairs, self._rebuild),
+            (self.x, self.v, self.w, self.a_prev),
+            (self.r, self.m, self.inertia, self.mat),
+            self.params,
+            (self.walls, self.wall_hist),
+            (tuple(polys.arrays()), tuple(table.arrays()), self.polygon_hist, tuple(polys.loads())),
+            (self.start, self.nbr, self.hist, self.x_ref),
+            (self._acc, self.f, self.tq, self.dissipated),
+        )
 
     # --- diagnostics (NumPy, not per step) -------------------------------------------------
 

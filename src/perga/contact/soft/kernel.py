@@ -1,56 +1,81 @@
 """Compiled soft-granule kernel: pair and wall forces, symplectic Euler, k steps inside numba.
 
-Arrays (SI, float64 unless said, C-contiguous): positions ``x`` (n, 2), velocities ``v`` (n, 2),
-angular velocities ``w`` (n,), radii ``r`` (n,), masses ``m`` (n,), moments ``inertia`` (n,)
-(m r²/2 for a disc), material ``mat`` (n,) int32, forces ``f`` (n, 2), torques ``tq`` (n,).
-Contact laws and the parameter table: ``perga.contact.soft.laws``. Neighbour list:
-``perga.contact.soft.neighbours`` (half list in CSR form, one tangential history float per entry).
+Arrays (SI, float64 unless said, C-contiguous) come in named bundles (``typing.NamedTuple``,
+which numba compiles as tuples with attribute access):
 
-Walls: ``walls`` (n_walls, 6) float64 rows ``[kind, a, b, c, d, mat]``:
+* ``Granules``: positions x (n, 2), velocities v (n, 2), angular velocities w (n,) and the
+  accelerations a_prev (n, 3) = (a_x, a_y, α) of the last step;
+* ``GranuleProps``: radii r (n,), masses m (n,), moments of inertia about the centre (n,)
+  (m r²/2 for a disc) and materials mat (n,) int32;
+* ``params``: the pair table (n_mat, n_mat, N_PARAMS) of ``perga.contact.soft.laws``;
+* ``Walls``: rows (n_walls, 6) and the tangential history hist (n, n_walls), below;
+* ``Polygons``: ``PolygonArrays``, ``TableArrays``, the contact history (n, n_poly,
+  ``HIST_COLUMNS``) and ``PolygonLoads`` (``perga.contact.soft.polygon_set``), empty arrays for
+  no polygons;
+* ``NeighbourList``: the half list start, nbr, hist (``perga.contact.soft.neighbours``) and the
+  positions x_ref (n, 2) it was built at;
+* ``Work``: the per-chunk force accumulator acc (n_chunks, n, 3), the contact forces f (n, 2)
+  and torques tq (n,) of the last step, the dissipated energies (3,);
+* ``Settings``: n_steps, dt (s), gravity (2,) m/s², skin (m), drag (1/s), v_cap (m/s), pairs,
+  rebuild.
+
+Walls: rows ``[kind, a, b, c, d, mat]``:
 
 * kind WALL_CHAMBER: round chamber, centre (a, b), inner radius c; the granule is inside;
 * kind WALL_PLANE: half-plane through (a, b) with unit normal (c, d) pointing into the domain.
 
-A wall is a body of infinite mass at rest: its contacts use m_eff = m_i (and I_i for rolling);
-their tangential history is ``wall_hist`` (n, n_walls).
+A wall is a body of infinite mass at rest: its contacts use m_eff = m_i (and I_i for rolling).
 
-Integrator (symplectic Euler, velocity kicks): forces from (x, v, w) at step start, then
-v += (f/m + g) dt, w += tq/I dt, x += v dt with the new v. Explicit Euler through forces gains
-energy (design §8: e = 1.18 at t_c/10); this scheme is stable to about dt = t_c/5 and is run at
-t_c/50 by default. Optional global drag (1/s, implicit: v ← v/(1 + drag·dt)) and a speed cap
-v_cap (m/s) serve ``SoftGranules.relax`` only; normal runs have drag = 0, v_cap = inf.
+Integrator: symplectic Euler with velocity kicks (Hairer, Lubich & Wanner, Geometric Numerical
+Integration, 2006, ch. I): forces from (x, v, w) at step start, then v += (f/m + g) dt,
+w += tq/I dt, x += v dt with the new v. Optional global drag (implicit: v ← v/(1 + drag·dt))
+and a speed cap v_cap serve ``SoftGranules.relax`` only; normal runs have drag = 0,
+v_cap = inf.
 
-Polygons (hammers, ``perga.contact.soft.polygon_forces``): ``poly`` = ``PolygonSet.arrays()``,
-``table`` =
-``ContactTable.arrays()``, ``loads`` = ``PolygonSet.loads()``, history ``phist`` (n, n_poly,
-``HIST_COLUMNS``); empty arrays for none. During a call of n steps each polygon moves rigidly
-from its pose at the call's first force evaluation with its (fixed) velocities: at step j
-(0-based) it is where ``polygons.pose`` puts it j·dt later, the PINNED pivot moving with it.
-After the call the set holds the pose n·dt later (the granules' time) and the loads are the
-means over the call. Contacts are evaluated for a candidate list (``polygons.candidates``),
-built at the call's first step and after every neighbour-list rebuild, so that granules far
-from every polygon cost nothing per step.
+Polygons (hammers, ``perga.contact.soft.polygon_forces``): during a call of n steps each polygon
+moves rigidly from its pose at the call's first force evaluation with its (fixed) velocities: at
+step j (0-based) it is where ``polygon_forces.pose`` puts it j·dt later, the PINNED pivot moving
+with it. After the call the polygons hold the pose n·dt later (the granules' time) and the loads
+are the means over the call. Contacts are evaluated for a candidate list
+(``polygon_forces.candidates``), built at the call's first step and after every neighbour-list
+rebuild, so that granules far from every polygon cost nothing per step.
 
 Dissipation: every contact reports the energy its law dissipated over the step
-(``contacts.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
-contact's end ½ k_t ξ²); ``dissipated`` (3,) accumulates [granule pairs, walls, polygons], J.
+(``laws.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
+contact's end ½ k_t ξ²); ``Work.dissipated`` accumulates [granule pairs, walls, polygons], J.
+
+Parallel loops: the bundles are unpacked into arrays before every ``prange`` loop, and the
+per-contact functions called inside it (``pair_force``, ``wall_force``, ``_kick_drift_one``,
+``polygon_forces.polygon_contact``) take the granule arrays themselves. Numba (0.68) drops writes
+made through a named tuple's field inside a parallel loop (numba issues #5872, #7135), and
+reading the granule arrays through a bundle there changed the compiled fast-math arithmetic in
+the last bit; polygon and table bundles, only read there, are passed whole.
 
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
-accumulating into its own slice of ``acc`` (n_chunks, n, 3), summed per granule afterwards, so
-each pair is computed once and no two threads write the same memory (no races, results
-identical for a given n_chunks). Everything else is per granule; polygon loads and their
-dissipation are summed per candidate entry in a fixed order afterwards, so they and the
-granules' polygon forces do not depend on the number of threads.
+accumulating into its own slice of ``acc``, summed per granule afterwards, so each pair is
+computed once and no two threads write the same memory (no races, results identical for a given
+n_chunks). Everything else is per granule; polygon loads and their dissipation are summed per
+candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
+depend on the number of threads.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
 
 from perga.contact.soft.laws import contact_law, released, rolling_torque, touching
 from perga.contact.soft.neighbours import build
-from perga.contact.soft.polygon_forces import add_loads, candidates, polygon_contact, pose
+from perga.contact.soft.polygon_forces import (
+    Candidates,
+    Pose,
+    add_loads,
+    candidates,
+    polygon_contact,
+    pose,
+)
+from perga.contact.soft.polygon_set import PolygonArrays, PolygonLoads, TableArrays
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
 
 WALL_CHAMBER = 0
@@ -58,7 +83,80 @@ WALL_PLANE = 1
 WALL_COLUMNS = 6
 
 DISSIPATED_PAIRS, DISSIPATED_WALLS, DISSIPATED_POLYGONS = 0, 1, 2
-"""Entries of the (3,) dissipated-energy totals of ``advance``."""
+"""Entries of the (3,) dissipated-energy totals ``Work.dissipated``, J."""
+
+
+class Granules(NamedTuple):
+    """Granule state: x (n, 2), m; v (n, 2), m/s; w (n,), rad/s; a_prev (n, 3): the last
+    step's accelerations (a_x, a_y) m/s² and α rad/s²."""
+
+    x: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    a_prev: np.ndarray
+
+
+class GranuleProps(NamedTuple):
+    """Granule constants: r (n,), m; m (n,), kg; inertia (n,), kg·m²; mat (n,) int32."""
+
+    r: np.ndarray
+    m: np.ndarray
+    inertia: np.ndarray
+    mat: np.ndarray
+
+
+class Walls(NamedTuple):
+    """Walls: rows (n_walls, WALL_COLUMNS) (module doc); hist (n, n_walls): tangential spring
+    ξ of each granule-wall contact, m."""
+
+    rows: np.ndarray
+    hist: np.ndarray
+
+
+class Polygons(NamedTuple):
+    """Polygons for the kernel: arrays (``PolygonArrays``, posed in place during a call), table
+    (``TableArrays``), hist (n, n_poly, ``HIST_COLUMNS``) the contact history, loads
+    (``PolygonLoads``) the mean loads over a call."""
+
+    arrays: PolygonArrays
+    table: TableArrays
+    hist: np.ndarray
+    loads: PolygonLoads
+
+
+class NeighbourList(NamedTuple):
+    """Verlet half list (``perga.contact.soft.neighbours``): start (n + 1,) int64, nbr int64,
+    hist (tangential spring ξ per entry, m), and x_ref (n, 2), the positions at its build, m."""
+
+    start: np.ndarray
+    nbr: np.ndarray
+    hist: np.ndarray
+    x_ref: np.ndarray
+
+
+class Work(NamedTuple):
+    """Arrays the kernel writes: acc (n_chunks, n, 3) per-chunk pair forces and torques (N, N·m;
+    ``new_accumulator``); f (n, 2), N, and tq (n,), N·m: the last step's contact forces and
+    torques; dissipated (3,): energy dissipated, J, added to (``DISSIPATED_*``)."""
+
+    acc: np.ndarray
+    f: np.ndarray
+    tq: np.ndarray
+    dissipated: np.ndarray
+
+
+class Settings(NamedTuple):
+    """The call's scalars: n_steps; dt, s; gravity (2,), m/s²; skin, m; drag, 1/s; v_cap, m/s;
+    pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first."""
+
+    n_steps: int
+    dt: float
+    gravity: np.ndarray
+    skin: float
+    drag: float
+    v_cap: float
+    pairs: bool
+    rebuild: bool
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -119,9 +217,12 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost):
-    """Pair forces into acc (n_chunks, n, 3) = (fx, fy, torque), one slice per chunk of i; the
-    energy the chunk's contacts dissipated into lost[c], J."""
+def pair_forces(granules, props, params, nbrs, dt, acc, lost):
+    """Pair forces of the list ``nbrs`` into acc (n_chunks, n, 3) = (fx, fy, torque), one slice
+    per chunk of i; the energy the chunk's contacts dissipated into lost[c], J."""
+    start, nbr, hist = nbrs.start, nbrs.nbr, nbrs.hist
+    x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
+    r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -150,9 +251,10 @@ def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, d
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist, dt):
+def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt):
     """Sum of the wall forces and torque on granule i and the energy they dissipated:
-    (fx, fy, tq, J); updates wall_hist[i]."""
+    (fx, fy, tq, J); updates wall_hist[i]. Arrays as in ``Granules``, ``GranuleProps`` and
+    ``Walls``."""
     h = 0.5 * dt
     ux = v[i, 0] + h * a_prev[i, 0]
     uy = v[i, 1] + h * a_prev[i, 1]
@@ -161,12 +263,12 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist,
     fy = 0.0
     tq = 0.0
     lost = 0.0
-    for s in range(walls.shape[0]):
-        if walls[s, 0] == WALL_CHAMBER:
-            dx = x[i, 0] - walls[s, 1]
-            dy = x[i, 1] - walls[s, 2]
+    for s in range(rows.shape[0]):
+        if rows[s, 0] == WALL_CHAMBER:
+            dx = x[i, 0] - rows[s, 1]
+            dy = x[i, 1] - rows[s, 2]
             d = math.sqrt(dx * dx + dy * dy)
-            delta = r[i] + d - walls[s, 3]
+            delta = r[i] + d - rows[s, 3]
             if d > 0.0:
                 nx = -dx / d
                 ny = -dy / d
@@ -174,17 +276,17 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist,
                 nx = 1.0
                 ny = 0.0
         else:
-            nx = walls[s, 3]
-            ny = walls[s, 4]
-            delta = r[i] - ((x[i, 0] - walls[s, 1]) * nx + (x[i, 1] - walls[s, 2]) * ny)
+            nx = rows[s, 3]
+            ny = rows[s, 4]
+            delta = r[i] - ((x[i, 0] - rows[s, 1]) * nx + (x[i, 1] - rows[s, 2]) * ny)
         ddelta = -(ux * nx + uy * ny)
         if not touching(delta, ddelta, dt):
             xi = wall_hist[i, s]
             if xi != 0.0:
-                lost += released(params, mat[i], int(walls[s, 5]), delta, xi)
+                lost += released(params, mat[i], int(rows[s, 5]), delta, xi)
                 wall_hist[i, s] = 0.0
             continue
-        b = int(walls[s, 5])
+        b = int(rows[s, 5])
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
@@ -201,7 +303,9 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist,
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev):
-    """Symplectic Euler for granule i from its force (fx, fy) and torque t; records a_prev[i]."""
+    """Symplectic Euler for granule i (state arrays as in ``Granules``) from its force (fx, fy),
+    N, and torque t, N·m, with the velocity factor damp = 1/(1 + drag·dt) and the speed cap
+    v_cap, m/s; records a_prev[i]."""
     ax = fx / m[i] + gravity[0]
     ay = fy / m[i] + gravity[1]
     alpha = t / inertia[i]
@@ -224,42 +328,26 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
-    x,
-    v,
-    w,
-    a_prev,
-    r,
-    m,
-    inertia,
-    mat,
-    params,
-    walls,
-    wall_hist,
-    poly,
-    table,
-    rho,
-    phist,
-    cstart,
-    cpoly,
-    ploads,
-    gravity,
-    dt,
-    drag,
-    v_cap,
-    acc,
-    f,
-    tq,
-    x_ref,
-    chunk,
+    granules, props, params, walls, poly, table, phist, rho, cand, settings, work, x_ref, chunk
 ):
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
-    Writes the step's total contact force and torque to f and tq; chunk[c] = (max displacement²
-    since the list build, max speed², wall dissipation, J) of chunk c (per-chunk values instead
-    of shared reduction variables). Polygon contacts: the candidate pairs (cstart, cpoly) of
-    each granule; entry e's load on its polygon and dissipation go to ploads[e] (see
-    ``polygons.add_loads``).
+    Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
+    displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J)) of chunk
+    c (per-chunk values instead of shared reduction variables). Polygon contacts: the candidate
+    pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
+    (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
+    entry e's load on its polygon and dissipation go to cand.loads[e]
+    (``polygon_forces.add_loads``). The polygon bundles come as arguments, not as a
+    ``Polygons``: a parallel loop takes a named tuple only from an argument or a constructor
+    call (numba 0.68); the other bundles are unpacked before the loop (module doc).
     """
+    x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
+    r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+    rows, wall_hist = walls.rows, walls.hist
+    acc, f, tq = work.acc, work.f, work.tq
+    dt, gravity, drag, v_cap = settings.dt, settings.gravity, settings.drag, settings.v_cap
+    cstart, cpoly, ploads = cand.start, cand.polygon, cand.loads
     n = x.shape[0]
     n_chunks = acc.shape[0]
     damp = 1.0 / (1.0 + drag * dt)
@@ -271,7 +359,7 @@ def _integrate(
         lost = 0.0
         for i in range(lo, hi):
             fx, fy, t, de = wall_force(
-                i, x, v, w, a_prev, r, m, inertia, mat, params, walls, wall_hist, dt
+                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt
             )
             lost += de
             for q in range(n_chunks):
@@ -316,72 +404,61 @@ def _stale(x, v, x_ref, skin, dt):
 
 
 @njit(cache=True)
-def advance(
-    n_steps,
-    x,
-    v,
-    w,
-    a_prev,
-    r,
-    m,
-    inertia,
-    mat,
-    params,
-    walls,
-    wall_hist,
-    poly,
-    table,
-    phist,
-    loads,
-    gravity,
-    dt,
-    skin,
-    start,
-    nbr,
-    hist,
-    x_ref,
-    acc,
-    f,
-    tq,
-    drag,
-    v_cap,
-    rebuild,
-    dissipated,
-    pairs,
-):
-    """Advance n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds).
+def advance(settings, granules, props, params, walls, polygons, nbrs, work):
+    """Advance settings.n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds),
+    the neighbour list after the call and the number of rebuilds.
 
-    pairs: False skips granule-granule contacts (no pair list built, no pair loop; acc must
-    then hold zeros, as ``new_accumulator`` makes it).
+    The bundles are those of the module doc; each may also be a plain tuple in its fields' order
+    (``tuple(bundle)``, for ``Polygons`` its parts too): numba types a named-tuple argument by
+    its class and field names on every call, which costs more than the kernel on small systems
+    (docs/performance.md), so ``SoftGranules.step`` passes plain tuples.
+
+    settings.pairs False skips granule-granule contacts (no pair list built, no pair loop;
+    work.acc must then hold zeros, as ``new_accumulator`` makes it).
 
     Rebuilds the neighbour list (carrying the tangential history over) before a step when
     2·(largest displacement since the last build) + dt·(largest speed) exceeds the skin (the
     dt·v term keeps listed every pair that ``touching`` may need half a step before first
-    contact), when start is not a list for these n granules, or when rebuild is True; x_ref
-    (n, 2) holds the positions at the last build and is updated in place. The polygon candidate
-    list (``polygons.candidates``) is built at the first step and after every rebuild. On
-    return f and tq hold the contact forces and torques of the last step, a_prev its
-    accelerations, the polygons their pose n_steps·dt after the call's start and loads the mean
-    force, torque and moment over the call; the dissipated energy (3,) has been added to.
+    contact), when nbrs.start is not a list for these n granules, or when settings.rebuild;
+    nbrs.x_ref holds the positions at the last build and is updated in place. The polygon
+    candidate list (``polygon_forces.candidates``) is built at the first step and after every
+    rebuild. On return work.f and work.tq hold the contact forces and torques of the last step,
+    granules.a_prev its accelerations, the polygons their pose n_steps·dt after the call's start
+    and their loads the mean force, torque and moment over the call; work.dissipated has been
+    added to.
     """
+    settings = Settings(*settings)
+    granules = Granules(*granules)
+    props = GranuleProps(*props)
+    walls = Walls(*walls)
+    polygons = Polygons(*polygons)
+    polygons = Polygons(
+        PolygonArrays(*polygons.arrays),
+        TableArrays(*polygons.table),
+        polygons.hist,
+        PolygonLoads(*polygons.loads),
+    )
+    nbrs = NeighbourList(*nbrs)
+    work = Work(*work)
+    x, v, r = granules.x, granules.v, props.r
+    n_steps, dt, skin, pairs = settings.n_steps, settings.dt, settings.skin, settings.pairs
+    start, nbr, hist, x_ref = nbrs.start, nbrs.nbr, nbrs.hist, nbrs.x_ref
+    poly, phist, loads = polygons.arrays, polygons.hist, polygons.loads
+    force, torque, moment = loads.force, loads.torque, loads.moment
+    dissipated = work.dissipated
     n = x.shape[0]
-    n_chunks = acc.shape[0]
-    force, torque, moment = loads
+    n_chunks = work.acc.shape[0]
     n_poly = force.shape[0]
-    verts0 = poly[0].copy()
-    com0 = poly[2].copy()
-    pivot0 = poly[8].copy()
-    rho = bounding_radii(poly[0], poly[1], poly[2])
+    origin = Pose(poly.vertices.copy(), poly.com.copy(), poly.pivot.copy())
+    rho = bounding_radii(poly.vertices, poly.start, poly.com)
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
     chunk = np.zeros((n_chunks, 3))
     lost = np.zeros(n_chunks)
-    cstart = np.zeros(n + 1, np.int64)
-    cpoly = np.zeros(0, np.int64)
-    ploads = np.zeros((0, 4))
+    cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
     n_rebuilds = 0
-    need = rebuild or (pairs and start.shape[0] != n + 1) or _stale(x, v, x_ref, skin, dt)
+    need = settings.rebuild or (pairs and start.shape[0] != n + 1) or _stale(x, v, x_ref, skin, dt)
     fresh = False
     for step in range(n_steps):
         if need:
@@ -392,49 +469,20 @@ def advance(
             fresh = False
         if n_poly > 0:
             if step > 0:
-                pose(verts0, com0, pivot0, poly, step * dt)
+                pose(origin, poly, step * dt)
             if not fresh:
                 span = (n_steps - 1 - step) * dt
-                cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
-                ploads = np.zeros((cpoly.shape[0], 4))
+                cand = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 fresh = True
         if pairs:
-            pair_forces(
-                x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost
-            )
+            nbrs = NeighbourList(start, nbr, hist, x_ref)
+            pair_forces(granules, props, params, nbrs, dt, work.acc, lost)
         _integrate(
-            x,
-            v,
-            w,
-            a_prev,
-            r,
-            m,
-            inertia,
-            mat,
-            params,
-            walls,
-            wall_hist,
-            poly,
-            table,
-            rho,
-            phist,
-            cstart,
-            cpoly,
-            ploads,
-            gravity,
-            dt,
-            drag,
-            v_cap,
-            acc,
-            f,
-            tq,
-            x_ref,
-            chunk,
-        )
+            granules, props, params, walls, poly, polygons.table, phist, rho, cand, settings, work,
+            x_ref, chunk,
+        )  # fmt: skip
         if n_poly > 0:
-            dissipated[DISSIPATED_POLYGONS] += add_loads(
-                cpoly, ploads, poly[2], force, torque, moment
-            )
+            dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
         dmax = 0.0
         smax = 0.0
         for c in range(n_chunks):
@@ -444,7 +492,7 @@ def advance(
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     if n_poly > 0 and n_steps > 0:
-        pose(verts0, com0, pivot0, poly, n_steps * dt)
+        pose(origin, poly, n_steps * dt)
         force /= n_steps
         torque /= n_steps
         moment /= n_steps

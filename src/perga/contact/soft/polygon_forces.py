@@ -55,6 +55,7 @@ is not modelled.
 """
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -82,12 +83,47 @@ N_CHUNKS = 64
 """Granules are split into this many chunks for the parallel loop (fixed: deterministic sums)."""
 
 
+class Discs(NamedTuple):
+    """The granule arrays a polygon contact reads: positions x (n, 2), m; velocities v (n, 2),
+    m/s; angular velocities w (n,), rad/s; radii r (n,), m; masses m (n,), kg; materials mat
+    (n,) int32 (row of the ``ContactTable``)."""
+
+    x: np.ndarray
+    v: np.ndarray
+    w: np.ndarray
+    r: np.ndarray
+    m: np.ndarray
+    mat: np.ndarray
+
+
+class Pose(NamedTuple):
+    """A pose of the polygons to move from (``pose``): vertices (n_vertices, 2), centres of mass
+    com (n_poly, 2) and pivots (n_poly, 2), m."""
+
+    vertices: np.ndarray
+    com: np.ndarray
+    pivot: np.ndarray
+
+
+class Candidates(NamedTuple):
+    """Candidate (granule, polygon) pairs in CSR form (``candidates``): granule i's entries are
+    start[i]:start[i + 1] (int64), polygon[e] (int64) the polygon of entry e; loads (n_entries, 4)
+    per entry: force on the polygon x, y (N), torque about its centre of mass (N·m), energy
+    dissipated (J), of the current step (``add_loads``)."""
+
+    start: np.ndarray
+    polygon: np.ndarray
+    loads: np.ndarray
+
+
 @nb.njit(cache=True, fastmath=FASTMATH)
-def pose(verts0, com0, pivot0, poly, t):
-    """Pose the polygons ``poly`` (``PolygonSet.arrays()``) t seconds after the pose (verts0,
-    com0, pivot0) by rigid motion at their velocities: c(t) = c0 + v_c t, vertices and pivot
-    turned by ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
-    verts, start, com, vel, omega, _, _, _, pivot = poly[:9]
+def pose(origin, poly, t):
+    """Pose the polygons ``poly`` (``PolygonArrays``) t seconds after the pose ``origin``
+    (``Pose``) by rigid motion at their velocities: c(t) = c0 + v_c t, vertices and pivot turned
+    by ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
+    verts0, com0, pivot0 = origin.vertices, origin.com, origin.pivot
+    verts, start, com, vel = poly.vertices, poly.start, poly.com, poly.velocity
+    omega, pivot = poly.omega, poly.pivot
     for k in range(com.shape[0]):
         c = math.cos(omega[k] * t)
         s = math.sin(omega[k] * t)
@@ -107,12 +143,14 @@ def pose(verts0, com0, pivot0, poly, t):
 
 
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _end_contact(i, k, ri, mat, pmat, law, k_t, hist):
+def _end_contact(i, k, mat, pmat, table, hist):
     """Reset a pair that is not touching; returns the energy of a dropped tangential spring, J."""
     if hist[i, k, HIST_ACTIVE] == 0.0:
         return 0.0
     xi = hist[i, k, HIST_XI]
-    released = 0.5 * k_t[mat[i], pmat[k]] * xi * xi if law[mat[i], pmat[k]] == LINEAR else 0.0
+    a = mat[i]
+    b = pmat[k]
+    released = 0.5 * table.k_t[a, b] * xi * xi if table.law[a, b] == LINEAR else 0.0
     hist[i, k, HIST_XI] = 0.0
     hist[i, k, HIST_ACTIVE] = 0.0
     hist[i, k, HIST_RATE] = 0.0
@@ -125,14 +163,16 @@ def _end_contact(i, k, ri, mat, pmat, law, k_t, hist):
 def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     """Contact of granule i with polygon k over one step; updates hist[i, k] (module doc).
 
-    Granule arrays as in ``polygon_contacts``; poly: ``PolygonSet.arrays()`` at the step's pose;
-    table: ``ContactTable.arrays()``; rho: ``bounding_radii`` of the polygons. Returns
+    x, v, w, r, m, mat: the granule arrays (``Discs``); poly: ``PolygonArrays`` at the step's
+    pose; table: ``TableArrays``; rho: ``bounding_radii`` of the polygons, m; dt: step, s. Returns
     (evaluated, fx, fy, tq, tq_poly, dissipated): whether the contact was evaluated; force on the
     granule, N (−it on the polygon); torque on the granule, N·m; torque on the polygon about its
     centre of mass, N·m; energy dissipated over the step, J.
     """
-    com, pvel, pomega, kind, pmass, pinertia, pivot, pmat = poly[2:10]
-    law, k_n, k_t, damping, friction, clamp = table
+    com, pvel, pomega, kind = poly.com, poly.velocity, poly.omega, poly.kind
+    pmass, pinertia, pivot, pmat = poly.mass, poly.inertia, poly.pivot, poly.mat
+    law, k_n, k_t, damping = table.law, table.k_n, table.k_t, table.damping
+    friction, clamp = table.friction, table.clamp
     xi = x[i, 0]
     yi = x[i, 1]
     ri = r[i]
@@ -149,8 +189,8 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
             + abs(pomega[k]) * (dist + ri)
         ) + 0.5 * abs(hist[i, k, HIST_RATE])
         if dist - reach >= 0.5 * dt * bound:
-            return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, ri, mat, pmat, law, k_t, hist)
-    d, nx, ny = closest_feature(xi, yi, poly[0], poly[1], poly[10], poly[11], k)
+            return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
+    d, nx, ny = closest_feature(xi, yi, poly.vertices, poly.start, poly.solid, poly.corner, k)
     delta = ri - d
     # Contact point: middle of the overlap (the surface point before first touch); t = (-ny, nx).
     arm = ri - 0.5 * max(delta, 0.0)
@@ -171,7 +211,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     rate = 1.5 * delta_dot - 0.5 * hist[i, k, HIST_RATE] if active else delta_dot
     vt = 1.5 * slip - 0.5 * hist[i, k, HIST_SLIP] if active else slip
     if not touching(delta, rate, dt):
-        return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, ri, mat, pmat, law, k_t, hist)
+        return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
     if not active:  # a new contact: the previous one's totals are forgotten
         hist[i, k, HIST_NORMAL_IMPULSE] = 0.0
         hist[i, k, HIST_TANGENTIAL_IMPULSE] = 0.0
@@ -215,13 +255,14 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
 
 
 @nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _polygon_contacts(x, v, w, r, m, mat, poly, table, dt, hist, f, tq, loads):
+def _polygon_contacts(discs, poly, table, dt, hist, f, tq, loads):
     """Compiled ``polygon_contacts`` (arrays unchecked); returns the number of contacts."""
-    com = poly[2]
-    force, torque, moment = loads
+    x, v, w, r, m, mat = discs.x, discs.v, discs.w, discs.r, discs.m, discs.mat
+    com = poly.com
+    force, torque, moment = loads.force, loads.torque, loads.moment
     n = x.shape[0]
     n_poly = com.shape[0]
-    rho = bounding_radii(poly[0], poly[1], com)
+    rho = bounding_radii(poly.vertices, poly.start, com)
     n_chunks = min(N_CHUNKS, max(n, 1))
     part = np.zeros((n_chunks, n_poly, 3))
     counts = np.zeros(n_chunks, dtype=np.int64)
@@ -259,31 +300,31 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
     px = x_ref[i, 0]
     py = x_ref[i, 1]
     limit = r[i] + reach[k] / slack[k]
-    dx = px - poly[2][k, 0]
-    dy = py - poly[2][k, 1]
+    dx = px - poly.com[k, 0]
+    dy = py - poly.com[k, 1]
     if dx * dx + dy * dy >= (rho[k] + limit) ** 2:  # outside the bounding circle: cheap reject
         return False
-    return separation(px, py, poly[0], poly[1][k], poly[1][k + 1]) < limit
+    return separation(px, py, poly.vertices, poly.start[k], poly.start[k + 1]) < limit
 
 
 @nb.njit(cache=True, parallel=True)
 def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
     """(granule, polygon) pairs the fused step evaluates over the next ``span`` s of a call, as
-    a CSR list (start (n + 1,) int64, polygon of each entry), sorted by granule then polygon.
+    ``Candidates`` (loads zeroed), sorted by granule then polygon.
 
-    poly: the polygons posed now (``PolygonSet.arrays()``); x_ref: granule positions at the
+    poly: the polygons posed now (``PolygonArrays``); x_ref: granule positions at the
     last neighbour-list build; skin: its skin, m. The kernel rebuilds that list when
     2|x − x_ref| + dt|v| would exceed the skin, so at every step |x − x_ref| + ½ dt |v| ≤ ½ skin.
     No point of polygon k moves faster than S = |v_c| + |ω| ρ, so within ``span`` the gap
     g = d − r_i between a granule and it falls by at most S·span plus the granule's
-    displacement; a pair not in contact touches (``contacts.touching``, approach rate ≤
+    displacement; a pair not in contact touches (``laws.touching``, approach rate ≤
     |v_i| + |v_c| + |ω|(ρ + g)) only if (1 − ½ dt|ω|) g < ½ dt (|v_i| + |v_c| + |ω| ρ). So with
     g measured from x_ref to the polygon now, pairs with (1 − ½ dt|ω|) g ≥ ½ skin + S·span +
     ½ dt (|v_c| + |ω| ρ) are left out. Pairs in contact (``HIST_ACTIVE``) are always in, so that
     their end is evaluated.
     """
     n = x_ref.shape[0]
-    velocity, omega = poly[3], poly[4]
+    velocity, omega = poly.velocity, poly.omega
     n_poly = omega.shape[0]
     reach = np.empty(n_poly)
     slack = np.empty(n_poly)
@@ -305,18 +346,19 @@ def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
             if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
                 cpoly[q] = k
                 q += 1
-    return start, cpoly
+    return Candidates(start, cpoly, np.zeros((cpoly.shape[0], 4)))
 
 
 @nb.njit(cache=True)
-def add_loads(cpoly, ploads, com, force, torque, moment):
-    """Add one step's polygon loads to force (n_poly, 2), torque and moment (n_poly,) and return
-    the energy its contacts dissipated, J.
+def add_loads(cand, com, loads):
+    """Add one step's polygon loads ``cand.loads`` (``Candidates``) to ``loads``
+    (``PolygonLoads``) and return the energy the step's contacts dissipated, J.
 
-    ploads (n_entries, 4): per candidate entry (force on the polygon x, y, torque about its
-    centre of mass, dissipated energy); summed in entry order (independent of the thread count);
-    moment = torque + com × force about the origin at this step's com.
+    Summed in entry order (independent of the thread count); moment = torque + com × force about
+    the origin at this step's com (n_poly, 2), m.
     """
+    cpoly, ploads = cand.polygon, cand.loads
+    force, torque, moment = loads.force, loads.torque, loads.moment
     n_poly = com.shape[0]
     step = np.zeros((n_poly, 3))
     dissipated = 0.0
@@ -338,9 +380,8 @@ def add_loads(cpoly, ploads, com, force, torque, moment):
 def _contact_energy(x, r, mat, poly, table, hist, normal, tangential):
     """Elastic energy in the granule-polygon contacts at the current poses, J (see
     ``contact_energy``)."""
-    verts, start, com = poly[0], poly[1], poly[2]
-    pmat = poly[9]
-    law, k_n, k_t = table[0], table[1], table[2]
+    verts, start, com, pmat = poly.vertices, poly.start, poly.com, poly.mat
+    law, k_n, k_t = table.law, table.k_n, table.k_t
     rho = bounding_radii(verts, start, com)
     n = x.shape[0]
     energy = np.zeros(n)
@@ -350,7 +391,7 @@ def _contact_energy(x, r, mat, poly, table, hist, normal, tangential):
             dist = math.sqrt((x[i, 0] - com[k, 0]) ** 2 + (x[i, 1] - com[k, 1]) ** 2)
             if dist >= rho[k] + r[i] and xi == 0.0:
                 continue
-            d, _, _ = closest_feature(x[i, 0], x[i, 1], poly[0], poly[1], poly[10], poly[11], k)
+            d, _, _ = closest_feature(x[i, 0], x[i, 1], verts, start, poly.solid, poly.corner, k)
             delta = max(r[i] - d, 0.0)
             a = mat[i]
             b = pmat[k]
@@ -420,10 +461,10 @@ def polygon_contacts(
     check_materials(mat, polygons, table)
     if n == 0 or n_poly == 0:
         return 0
+    discs = Discs(x, v, w, r, m, mat)
     count = _polygon_contacts(
-        x, v, w, r, m, mat, polygons.arrays(), table.arrays(), float(dt), history, f, tq,
-        polygons.loads(),
-    )  # fmt: skip
+        discs, polygons.arrays(), table.arrays(), float(dt), history, f, tq, polygons.loads()
+    )
     return int(count)
 
 
@@ -445,5 +486,6 @@ def contact_energy(
     """
     if x.shape[0] == 0 or polygons.n_poly == 0:
         return 0.0
-    arrays = polygons.arrays(), table.arrays()
-    return float(_contact_energy(x, r, mat, *arrays, history, normal, tangential))
+    return float(
+        _contact_energy(x, r, mat, polygons.arrays(), table.arrays(), history, normal, tangential)
+    )

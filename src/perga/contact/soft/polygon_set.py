@@ -35,6 +35,7 @@ the contacts that ended.
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -61,6 +62,43 @@ HIST_COLUMNS = 7
 """Columns of the (granule, polygon) contact history (module doc)."""
 
 _LAWS = {"linear": LINEAR, "hertz": HERTZ}
+
+
+class PolygonArrays(NamedTuple):
+    """The arrays of a ``PolygonSet`` that compiled code reads, by the same names (its doc)."""
+
+    vertices: np.ndarray
+    start: np.ndarray
+    com: np.ndarray
+    velocity: np.ndarray
+    omega: np.ndarray
+    kind: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    pivot: np.ndarray
+    mat: np.ndarray
+    solid: np.ndarray
+    corner: np.ndarray
+
+
+class PolygonLoads(NamedTuple):
+    """Loads on the polygons (``PolygonSet`` doc): force (n_poly, 2), N; torque about the centre
+    of mass and moment about the origin (n_poly,), N·m."""
+
+    force: np.ndarray
+    torque: np.ndarray
+    moment: np.ndarray
+
+
+class TableArrays(NamedTuple):
+    """The arrays of a ``ContactTable``, by the same names (its doc)."""
+
+    law: np.ndarray
+    k_n: np.ndarray
+    k_t: np.ndarray
+    damping: np.ndarray
+    friction: np.ndarray
+    clamp: np.ndarray
 
 
 @dataclass
@@ -140,9 +178,9 @@ class PolygonSet:
         self.velocity[k] = velocity
         self.omega[k] = omega
 
-    def arrays(self) -> tuple:
-        """The geometry and inertia arrays in the order the compiled functions take them."""
-        return (
+    def arrays(self) -> PolygonArrays:
+        """The geometry, motion and inertia arrays, as the compiled functions take them."""
+        return PolygonArrays(
             self.vertices,
             self.start,
             self.com,
@@ -162,9 +200,9 @@ class PolygonSet:
         closest_feature` takes after the point."""
         return self.vertices, self.start, self.solid, self.corner
 
-    def loads(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def loads(self) -> PolygonLoads:
         """(force, torque, moment), the load arrays the compiled functions write."""
-        return self.force, self.torque, self.moment
+        return PolygonLoads(self.force, self.torque, self.moment)
 
 
 def polygon_set(
@@ -260,9 +298,9 @@ class ContactTable:
     friction: np.ndarray
     clamp: np.ndarray
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
+    def arrays(self) -> TableArrays:
         """(law, k_n, k_t, damping, friction, clamp), as the compiled functions take them."""
-        return self.law, self.k_n, self.k_t, self.damping, self.friction, self.clamp
+        return TableArrays(self.law, self.k_n, self.k_t, self.damping, self.friction, self.clamp)
 
 
 def contact_table(
