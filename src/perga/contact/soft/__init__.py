@@ -1,13 +1,16 @@
 """Soft granules: spring-dashpot discs tuned to a restitution e, integrated by a numba kernel.
 
-* ``contacts``: the contact laws (linear, Hertz-Tsuji; Cundall-Strack tangential spring with
+* ``laws``: the contact laws (linear, Hertz-Tsuji; Cundall-Strack tangential spring with
   Coulomb cap; rolling resistance) as pure numba functions, and the parameter table;
 * ``neighbours``: cell list + Verlet half list with skin, history carried over rebuilds;
 * ``kernel``: pair, wall and polygon forces, symplectic Euler, ``advance`` (k steps inside
   numba), the energy each contact law dissipated;
-* ``polygons``: discs against convex rigid polygons (hammers), moved rigidly within a call,
-  with mean loads and per-contact impact history;
-* ``granules``: ``SoftGranules``, the Python holder with ``step(n)`` and ``relax()``.
+* ``polygon_set``: convex rigid polygons (hammers, a drawn wall), the granule-polygon contact
+  table and the per-contact history;
+* ``polygon_forces``: discs against those polygons, moved rigidly within a call, with mean
+  loads and per-contact impact history;
+* ``granules``: ``SoftGranules``, the Python holder with ``step(n)``, ``relax()`` and
+  diagnostics (energies, ``contact_counts``).
 """
 
 from perga.contact.soft.granules import DEFAULT_DT_FRACTION, SoftGranules, chamber, plane

@@ -19,6 +19,7 @@ from perga.contact.soft.neighbours import build, default_skin, empty_list
 from perga.contact.soft.polygon_forces import contact_energy
 from perga.contact.soft.polygon_set import (
     FREE,
+    HIST_ACTIVE,
     HIST_COLUMNS,
     LINEAR,
     PINNED,
@@ -27,7 +28,7 @@ from perga.contact.soft.polygon_set import (
     check_materials,
     no_polygons,
 )
-from perga.geometry.disc_polygon import bounding_radii
+from perga.geometry.disc_polygon import bounding_radii, closest_feature
 
 DEFAULT_DT_FRACTION = 1.0 / 50.0
 """Default step as a fraction of the shortest contact duration (MercuryDPM convention)."""
@@ -71,7 +72,7 @@ class SoftGranules:
 
     The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
     moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
-    ``polygons.HIST_COLUMNS``) is the granule-polygon contact history, impact totals included;
+    ``polygon_set.HIST_COLUMNS``) is the granule-polygon contact history, impact totals included;
     ``dissipated`` (3,) the energy the contact laws dissipated since the start (or ``relax``),
     J: [granule pairs, walls, polygons] (``kernel.DISSIPATED_*``).
     """
@@ -249,29 +250,40 @@ class SoftGranules:
         if self.polygon_hist.shape != (self.n, polys.n_poly, HIST_COLUMNS):
             raise ValueError("polygon_hist does not match the granules and polygons")
         previous = numba.get_num_threads()
-        numba.set_num_threads(self.threads)
+        switch = previous != self.threads  # set_num_threads costs time (docs/performance.md)
+        if switch:
+            numba.set_num_threads(self.threads)
         try:
             self.start, self.nbr, self.hist, rebuilt = kernel.advance(
                 *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap))
             )
         finally:
-            numba.set_num_threads(previous)
+            if switch:
+                numba.set_num_threads(previous)
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
         self.time += n_steps * self.dt
 
     def _bundles(
-        self, polys: PolygonSet, table: ContactTable, n_steps: int, drag: float, v_cap: float
+        self, p: PolygonSet, t: ContactTable, n_steps: int, drag: float, v_cap: float
     ) -> tuple:
         """The arguments of ``kernel.advance``: its bundles as plain tuples in their fields'
-        order (``kernel.advance`` doc: a plain tuple costs less to pass than a named one)."""
+        order (``kernel.advance`` doc: they cost less to pass and to build than named ones;
+        ``tests/contact/soft/test_bundles.py`` checks the order)."""
+        polygons = (
+            (p.vertices, p.start, p.com, p.velocity, p.omega, p.kind, p.mass, p.inertia, p.pivot,
+             p.mat, p.solid, p.corner),
+            (t.law, t.k_n, t.k_t, t.damping, t.friction, t.clamp),
+            self.polygon_hist,
+            (p.force, p.torque, p.moment),
+        )  # fmt: skip
         return (
             (n_steps, self.dt, self.gravity, self.skin, drag, v_cap, self.pairs, self._rebuild),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),
             self.params,
             (self.walls, self.wall_hist),
-            (tuple(polys.arrays()), tuple(table.arrays()), self.polygon_hist, tuple(polys.loads())),
+            polygons,
             (self.start, self.nbr, self.hist, self.x_ref),
             (self._acc, self.f, self.tq, self.dissipated),
         )
@@ -338,7 +350,7 @@ class SoftGranules:
         After a step the overlaps are those at the granules' time t and the springs those updated
         by the last step, i.e. half a step earlier (kick-drift): an energy balance closes to
         O(dt²) with the normal part averaged over the step's start and end and the tangential
-        part taken at its end (``tests/soft/test_kernel_energy.py``).
+        part taken at its end (``tests/contact/soft/test_kernel_energy.py``).
         """
         parts = {"normal": normal, "tangential": tangential}
         i, j, delta, k = self._pairs(springs=True)
@@ -353,7 +365,7 @@ class SoftGranules:
 
     def polygon_contact_energy(self, *, normal: bool = True, tangential: bool = True) -> float:
         """Elastic energy stored in the granule-polygon contacts at the polygons' current pose, J
-        (``polygons.contact_energy``; after ``step`` that pose is at the granules' time)."""
+        (``polygon_forces.contact_energy``; after ``step`` that pose is at the granules' time)."""
         polys, table = self._poly
         return contact_energy(
             self.x, self.r, self.mat, polys, table, self.polygon_hist, normal, tangential
@@ -373,6 +385,34 @@ class SoftGranules:
     def energy(self) -> float:
         """Kinetic + gravitational + elastic contact energy, J."""
         return self.kinetic_energy() + self.potential_energy() + self.contact_energy()
+
+    def contact_counts(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per granule, the number of its contacts now and the largest of their overlaps, m:
+        (counts (n,) int32, overlaps (n,) float64, 0 without a contact).
+
+        Contacts: granule pairs and walls with overlap δ > 0, and polygons whose contact the
+        kernel holds active (``polygon_hist[:, :, HIST_ACTIVE] != 0``, which may begin half a
+        step before first touch) with overlap r − d, d from ``closest_feature`` at the granule's
+        centre. Builds the neighbour list first if a build is pending (``invalidate``, or no
+        step yet).
+        """
+        n = self.n
+        i, j, delta, _ = self._pairs()
+        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+        overlap = np.zeros(n)
+        np.maximum.at(overlap, i, delta)
+        np.maximum.at(overlap, j, delta)
+        walls = self._walls_overlap()
+        count += np.count_nonzero(walls > 0.0, axis=1)
+        if walls.size:
+            np.maximum(overlap, walls.max(axis=1), out=overlap)
+        active = self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        count += np.count_nonzero(active, axis=1)
+        outline = self._poly[0].outline()
+        for a, k in np.argwhere(active):
+            d, _, _ = closest_feature(self.x[a, 0], self.x[a, 1], *outline, k)
+            overlap[a] = max(overlap[a], self.r[a] - d)
+        return count.astype(np.int32), overlap
 
     def max_overlap(self) -> float:
         """Largest overlap of any granule with a granule or wall, m (0 with no contact)."""
@@ -413,7 +453,7 @@ class SoftGranules:
         v_release; then zeroes velocities, spins, tangential springs, the polygon contact history
         and ``dissipated``. Polygons are held at rest meanwhile (their velocities are restored
         afterwards); overlaps with them are not part of the release criterion. Without it a
-        densely overlapping packing explodes (design §5: 485 m/s). Raises RuntimeError after
+        densely overlapping packing explodes (docs/validation.md). Raises RuntimeError after
         max_steps.
         """
         drag = math.pi / self.t_c if drag is None else drag

@@ -44,12 +44,13 @@ Dissipation: every contact reports the energy its law dissipated over the step
 (``laws.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
 contact's end ½ k_t ξ²); ``Work.dissipated`` accumulates [granule pairs, walls, polygons], J.
 
-Parallel loops: the bundles are unpacked into arrays before every ``prange`` loop, and the
-per-contact functions called inside it (``pair_force``, ``wall_force``, ``_kick_drift_one``,
-``polygon_forces.polygon_contact``) take the granule arrays themselves. Numba (0.68) drops writes
-made through a named tuple's field inside a parallel loop (numba issues #5872, #7135), and
-reading the granule arrays through a bundle there changed the compiled fast-math arithmetic in
-the last bit; polygon and table bundles, only read there, are passed whole.
+Parallel loops: the bundles are unpacked into arrays before every ``prange`` loop (and
+``pair_forces``, the hottest, takes arrays), and the per-contact functions called inside it
+(``pair_force``, ``wall_force``, ``_kick_drift_one``, ``polygon_forces.polygon_contact``) take
+the granule arrays themselves. Numba (0.68) drops writes made through a named tuple's field
+inside a parallel loop (numba issues #5872, #7135), and reading the granule arrays through a
+bundle there changed the compiled fast-math arithmetic in the last bit; polygon and table
+bundles, only read there, are passed whole.
 
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
 accumulating into its own slice of ``acc``, summed per granule afterwards, so each pair is
@@ -217,12 +218,11 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def pair_forces(granules, props, params, nbrs, dt, acc, lost):
-    """Pair forces of the list ``nbrs`` into acc (n_chunks, n, 3) = (fx, fy, torque), one slice
-    per chunk of i; the energy the chunk's contacts dissipated into lost[c], J."""
-    start, nbr, hist = nbrs.start, nbrs.nbr, nbrs.hist
-    x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
-    r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost):
+    """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
+    one slice per chunk of i; the energy the chunk's contacts dissipated into lost[c], J.
+    Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is the
+    kernel's hottest, and it ran slower taking the bundles (docs/performance.md)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -472,11 +472,14 @@ def advance(settings, granules, props, params, walls, polygons, nbrs, work):
                 pose(origin, poly, step * dt)
             if not fresh:
                 span = (n_steps - 1 - step) * dt
-                cand = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
+                cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
+                cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
         if pairs:
-            nbrs = NeighbourList(start, nbr, hist, x_ref)
-            pair_forces(granules, props, params, nbrs, dt, work.acc, lost)
+            pair_forces(
+                x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
+                start, nbr, hist, dt, work.acc, lost,
+            )  # fmt: skip
         _integrate(
             granules, props, params, walls, poly, polygons.table, phist, rho, cand, settings, work,
             x_ref, chunk,

@@ -53,7 +53,7 @@ P_KN, P_DAMP, P_KT, P_DAMPT, P_MU, P_MUR, P_HERTZ, P_CLAMP = range(8)
 N_PARAMS = 8
 
 DEFAULT_KT_RATIO = 2.0 / 7.0
-"""Default k_t/k_n = 2/7: the ratio of LAMMPS ``gran/hooke/history`` and the peers of design §8.
+"""Default k_t/k_n = 2/7: LAMMPS ``pair_style gran/hooke/history``'s k_t for k_t = NULL.
 
 For spheres it equals the tangential and normal contact periods (tangential effective mass
 m/(1 + m r²/I) = 2m/7). For discs (I = m r²/2) the period-matching ratio would be 1/3; 2/7 is
@@ -97,9 +97,8 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     The dashpot enters as its exact impulse over the kick interval: ∫ c(δ) δ̇ dt =
     D√(k_n m_eff)[Φ(δ⁺) − Φ(δ⁻)] with δ± = max(0, δ ± ½ dt δ̇), Φ(δ) = δ (linear) or
     (4/5) δ^{5/4} (Hertz), divided by dt. Inside a contact this equals the usual c(δ) δ̇ to
-    O(dt²); at first touch it applies only the part of the step the bodies overlap, instead of
-    switching the full c v0 on for a whole step, which made e depend on where first touch falls
-    within a step (±1-2 % at e = 0.3, t_c/50).
+    O(dt²); at first touch it applies only the part of the step the bodies overlap, so that e
+    does not depend on where in a step first touch falls (docs/validation.md).
 
     Dissipated energy over the step, J, from the law itself (≥ 0): normal (F_n − F_spring)·δ̇·dt
     (the dashpot's work, and the spring energy lost while F_n is clamped at 0) plus tangential
@@ -224,8 +223,8 @@ def contact_parameters(
     k_n directly, or for "linear" from a contact duration t_c (s) on reduced mass m_ref (kg)
     (``LinearSpringDashpot.from_duration``). k_t = kt_ratio·k_n (Hertz: k_t = kt_ratio·k_n·√δ);
     friction f, rolling μ_r, tangential damping ratio zeta_t. end="force" (default) clamps
-    F_n ≥ 0 and calibrates ζ for it (Schwager & Pöschel 2007: with the ζ of "overlap" e would
-    come out 0.718 instead of 0.7); end="overlap" lets the force be attractive until δ = 0.
+    F_n ≥ 0 and calibrates ζ for it (Schwager & Pöschel 2007; docs/validation.md);
+    end="overlap" lets the force be attractive until δ = 0.
     """
     if model not in ("linear", "hertz"):
         raise ValueError(f"model must be 'linear' or 'hertz' (got {model!r})")

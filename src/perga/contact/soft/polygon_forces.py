@@ -109,7 +109,8 @@ class Candidates(NamedTuple):
     """Candidate (granule, polygon) pairs in CSR form (``candidates``): granule i's entries are
     start[i]:start[i + 1] (int64), polygon[e] (int64) the polygon of entry e; loads (n_entries, 4)
     per entry: force on the polygon x, y (N), torque about its centre of mass (N·m), energy
-    dissipated (J), of the current step (``add_loads``)."""
+    dissipated (J), of the current step (written by ``kernel._integrate``, summed by
+    ``add_loads``)."""
 
     start: np.ndarray
     polygon: np.ndarray
@@ -310,7 +311,8 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
 @nb.njit(cache=True, parallel=True)
 def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
     """(granule, polygon) pairs the fused step evaluates over the next ``span`` s of a call, as
-    ``Candidates`` (loads zeroed), sorted by granule then polygon.
+    a CSR list (start (n + 1,) int64, polygon of each entry), sorted by granule then polygon:
+    ``Candidates.start`` and ``Candidates.polygon``.
 
     poly: the polygons posed now (``PolygonArrays``); x_ref: granule positions at the
     last neighbour-list build; skin: its skin, m. The kernel rebuilds that list when
@@ -346,7 +348,7 @@ def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
             if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
                 cpoly[q] = k
                 q += 1
-    return Candidates(start, cpoly, np.zeros((cpoly.shape[0], 4)))
+    return start, cpoly  # not a Candidates with its loads: slower (docs/performance.md)
 
 
 @nb.njit(cache=True)
