@@ -13,7 +13,7 @@ hammers  a round chamber (R = 0.19 m) with 6 plate hammers 80 x 6 mm welded to a
          100 rad/s (hinges at 0.10 m) ploughing through granules of r = 1 mm (the lattice
          annulus of ``engine_vs_pymunk.py``), no gravity; a warm-up window, then a timed one.
          perga soft runs it from the case file ``cases/mill-soft.toml`` (``[contact_model]``)
-         through ``perga.case.load_case``, ``scene_spec`` and ``SoftSimulation``.
+         through ``perga.case.load_case``, ``scene_spec`` and ``Simulation``.
 
 Engines:
 
@@ -77,22 +77,9 @@ from perga.analytic.contact import damping_ratio
 from perga.case import load_case
 from perga.contact.soft import SoftGranules, plane, uniform_table
 from perga.contact.soft.neighbours import build as build_neighbours
-from perga.engine import (
-    ChamberSpec,
-    ContactSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-    Simulation,
-    build_scene,
-)
+from perga.engine import Simulation
+from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 from perga.model.from_case import scene_spec
-
-try:  # soft granules with Pymunk hammers (perga run's [contact_model])
-    from perga.contact.soft.model import SoftSimulation
-except ImportError:  # not yet wired
-    SoftSimulation = None
 
 RIGID_DT = 1e-4  # s, perga rigid in the beds (design §8's Pymunk figure used the same)
 SHEAR_SPEED = 2.0  # m/s, speed of the sheared bed's top at t = 0
@@ -223,7 +210,7 @@ def lammps_contact(mass: float) -> dict[str, object]:
 
 def rigid_engine(spec: SceneSpec, warm: int, steps: int) -> Engine:
     def run() -> Result:
-        sim = Simulation(build_scene(spec), record_impacts=False, track_energy=False)
+        sim = Simulation(spec, record_impacts=False, track_energy=False)
         for _ in range(warm):
             sim.step()
         t0 = time.perf_counter()
@@ -237,7 +224,7 @@ def rigid_engine(spec: SceneSpec, warm: int, steps: int) -> Engine:
         }
         return Result(seconds, steps, 0, None, state)
 
-    return Engine("perga rigid (Pymunk)", len(spec.granules), spec.dt, run)
+    return Engine("perga rigid (Pymunk)", len(spec.granules), spec.granule_dt, run)
 
 
 def rigid_box_spec(bed: beds.Bed, v: np.ndarray | None = None) -> SceneSpec:
@@ -254,7 +241,7 @@ def rigid_box_spec(bed: beds.Bed, v: np.ndarray | None = None) -> SceneSpec:
         hammers=walls,
         granules=granule_specs(bed.x, beds.RADIUS, beds.MASS, v),
         contacts=rigid_contacts("wall"),
-        dt=RIGID_DT,
+        granule_dt=RIGID_DT,
         gravity=(0.0, -beds.GRAVITY),
         granule_collisions=True,
     )
@@ -402,25 +389,27 @@ def mill_case(x: np.ndarray, workdir: Path, substeps: int | None = None) -> Scen
     path = workdir / MILL_CASE.name
     path.write_text(text)
     spec = scene_spec(load_case(path))
-    assert spec.soft is not None and math.isclose(spec.dt, MILL_DT, rel_tol=1e-12), spec.dt
+    assert spec.contact_model.kind != "rigid" and math.isclose(
+        spec.granule_dt, MILL_DT, rel_tol=1e-12
+    )
     return spec
 
 
 def soft_mill_engine(spec: SceneSpec, threads: int, warm: int, steps: int) -> Engine:
-    """perga soft in the hammer scene: ``SoftSimulation`` (Pymunk rotor and hammers, soft
-    granules), impact recorder and energy meter off; one call = spec.soft.substeps steps."""
-    substeps = spec.soft.substeps
+    """perga soft in the hammer scene: ``Simulation`` (Pymunk rotor and hammers, soft
+    granules), impact recorder and energy meter off; one call = the contact model's substeps."""
+    substeps = spec.contact_model.substeps
 
     def make():
-        sim = SoftSimulation(build_scene(spec), record_impacts=False, track_energy=False)
-        sim.granules.set_threads(threads)
+        sim = Simulation(spec, record_impacts=False, track_energy=False)
+        sim.contacts.granules.set_threads(threads)
         return sim
 
     make().step()  # compiles or loads the kernel, untimed
 
     def run() -> Result:
         sim = make()
-        g = sim.granules
+        g = sim.contacts.granules
         for _ in range(warm // substeps):
             sim.step()
         before = g.n_rebuilds
@@ -430,20 +419,19 @@ def soft_mill_engine(spec: SceneSpec, threads: int, warm: int, steps: int) -> En
         return _soft_result(g, threads, steps, before, time.perf_counter() - t0)
 
     name = f"perga soft, {threads} thread{'s' if threads > 1 else ''}"
-    return Engine(name, len(spec.granules), spec.dt, run)
+    return Engine(name, len(spec.granules), spec.granule_dt, run)
 
 
 def hammers_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
     x = np.array(mill.granule_positions(n))
     warm, steps = args.mill_steps()
     engines: list[Engine] = []
-    if SoftSimulation is not None:
-        soft_spec = mill_case(x, workdir, args.mill_substeps)
-        substeps = soft_spec.soft.substeps
-        if warm % substeps or steps % substeps:
-            raise SystemExit(f"hammers: warm-up and timed steps must be multiples of {substeps}")
-        log(f"  perga soft: {MILL_CASE.name}, granule_substeps = {substeps}")
-        engines += [soft_mill_engine(soft_spec, t, warm, steps) for t in args.threads]
+    soft_spec = mill_case(x, workdir, args.mill_substeps)
+    substeps = soft_spec.contact_model.substeps
+    if warm % substeps or steps % substeps:
+        raise SystemExit(f"hammers: warm-up and timed steps must be multiples of {substeps}")
+    log(f"  perga soft: {MILL_CASE.name}, granule_substeps = {substeps}")
+    engines += [soft_mill_engine(soft_spec, t, warm, steps) for t in args.threads]
     if lmp:
         data = workdir / f"mill-{n}.data"
         k = hammer_lammps_data(data, x)
@@ -481,7 +469,7 @@ def hammers_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
             hammers=hammers,
             granules=granule_specs(x, MILL_RADIUS, MILL_MASS),
             contacts=rigid_contacts("steel", "wall"),
-            dt=MILL_RIGID_DT,
+            granule_dt=MILL_RIGID_DT,
             granule_collisions=True,
             chamber=ChamberSpec(mill.CHAMBER_RADIUS, WALL_THICKNESS, "wall", 96),
         )
@@ -578,9 +566,9 @@ def rigid_impact(v0: float) -> float:
         hammers=(wall_polygon(-0.02, -0.02, 0.02, 0.0),),
         granules=granule_specs(np.array([[0.0, r + 1e-3]]), r, m, np.array([[0.0, -v0]])),
         contacts=(ContactSpec("bb", "wall", beds.E, 0.0),),
-        dt=RIGID_DT,
+        granule_dt=RIGID_DT,
     )
-    sim = Simulation(build_scene(spec), record_impacts=False, track_energy=False)
+    sim = Simulation(spec, record_impacts=False, track_energy=False)
     for _ in range(50):
         sim.step()
     return float(sim.granule_velocities()[0][1] / v0)
@@ -730,11 +718,6 @@ def main(argv: list[str] | None = None) -> int:
             t0 = time.perf_counter()
             case = builders[name](n, args, lmp, workdir, log)
             log(f"\n{case.title}, load {load_average()}")
-            if name == "hammers" and SoftSimulation is None:
-                log(
-                    "  perga soft: not yet wired (soft granules with hammers need `perga run`'s "
-                    "[contact_model]; see docs/performance.md)"
-                )
             measure(case, blocks, log)
             rows += report(case, log)
             log(f"  ({time.perf_counter() - t0:.0f} s)")

@@ -10,10 +10,10 @@ round chamber wall 1 cm beyond the hammer tips keeps the bed in play (``--no-cha
 it the granules leave within ~25 ms and the step cost falls with them); no gravity (horizontal
 rotor). Variants:
 
-perga           ``build_scene(SceneSpec(...))`` + ``Simulation(scene, record_impacts=False,
+perga           ``Simulation(SceneSpec(...), record_impacts=False,
                 track_energy=False).step()``: the engine's core
 perga+impacts   the same with the impact recorder (begin/post_solve/separate callbacks)
-perga default   ``Simulation(scene)`` with its defaults (impact recorder and energy meter)
+perga default   ``Simulation(spec)`` with its defaults (impact recorder and energy meter)
 bare callback   Pymunk written out here in the same internal units (mm, ms, g), with the same
                 bodies, shapes, joints, filters, collision types and construction order as
                 perga, and per-pair e and f set in one ``pre_solve`` Python callback per pair
@@ -55,16 +55,8 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from perga.engine import (
-    ChamberSpec,
-    ContactSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-    Simulation,
-    build_scene,
-)
+from perga.engine import Simulation
+from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 
 # --- the scene, SI -------------------------------------------------------------------------------
 
@@ -176,7 +168,7 @@ def perga_spec(n: int, chamber: bool) -> SceneSpec:
         hammers=hammers,
         granules=granules,
         contacts=tuple(contacts),
-        dt=DT,
+        granule_dt=DT,
         iterations=ITERATIONS,
         granule_collisions=True,
         **extra,
@@ -184,14 +176,14 @@ def perga_spec(n: int, chamber: bool) -> SceneSpec:
 
 
 def build_perga(n: int, chamber: bool, name: str) -> Variant:
-    scene = build_scene(perga_spec(n, chamber))
+    spec = perga_spec(n, chamber)
     if name == "perga":
-        sim = Simulation(scene, record_impacts=False, track_energy=False)
+        sim = Simulation(spec, record_impacts=False, track_energy=False)
     elif name == "perga+impacts":
-        sim = Simulation(scene, record_impacts=True, track_energy=False)
+        sim = Simulation(spec, record_impacts=True, track_energy=False)
     else:
-        sim = Simulation(scene)
-    return Variant(name, sim.step, sim.scene.granule_bodies, LENGTH)
+        sim = Simulation(spec)
+    return Variant(name, sim.step, sim.contacts.bodies.granule_bodies, LENGTH)
 
 
 # --- bare Pymunk ---------------------------------------------------------------------------------

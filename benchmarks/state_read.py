@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from perga.contact.rigid.batch import GranuleReader
-from perga.engine import Simulation, build_scene
+from perga.engine import Simulation
 
 sys.path.insert(0, str(Path(__file__).parent))
 from engine_vs_pymunk import perga_spec
@@ -46,12 +46,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     print("|---:|---:|---:|---:|---:|")
     for n in args.sizes:
-        sim = Simulation(
-            build_scene(perga_spec(n, chamber=True)), record_impacts=False, track_energy=False
-        )
+        sim = Simulation(perga_spec(n, chamber=True), record_impacts=False, track_energy=False)
         for _ in range(20):
             sim.step()
-        reader = GranuleReader(sim.scene)
+        reader = GranuleReader(sim.machine.space, sim.contacts.bodies.granule_bodies)
         state = reader.read()
         assert np.array_equal(state.positions, sim.granule_positions())
         assert np.array_equal(state.velocities, sim.granule_velocities())

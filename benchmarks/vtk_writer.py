@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from perga.engine import Simulation, build_scene
+from perga.engine import Simulation
 from perga.output.vtk import VtkRecorder
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -33,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--frames", type=int, default=20, help="timed frame writes")
     args = p.parse_args(argv)
     sim = Simulation(
-        build_scene(perga_spec(args.granules, chamber=True)), record_impacts=True, track_energy=True
+        perga_spec(args.granules, chamber=True), record_impacts=True, track_energy=True
     )
     for _ in range(20):
         sim.step()
@@ -43,13 +43,13 @@ def main(argv: list[str] | None = None) -> int:
         sim.step()
         steps.append(time.perf_counter() - t0)
     with tempfile.TemporaryDirectory() as directory:
-        recorder = VtkRecorder(Path(directory))
-        recorder.record(sim)  # first frame: chamber, imports
+        recorder = VtkRecorder(Path(directory), sim.spec)
+        recorder.record(sim.frame(), sim.impacts)  # first frame: chamber, imports
         writes = []
         for _ in range(args.frames):
             sim.step()
             t0 = time.perf_counter()
-            recorder.record(sim)
+            recorder.record(sim.frame(), sim.impacts)
             writes.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
         recorder.close()

@@ -1,5 +1,5 @@
 """The closed forms of design §4 reproduced by the engine, each through a real case file in
-``tests/cases/closed-form/``: load_case -> scene_spec -> build_scene -> Simulation at the case's
+``tests/cases/closed-form/``: load_case -> scene_spec -> Simulation at the case's
 bundled time step (``solver.dt``), compared with :mod:`perga.analytic`.
 
 Every geometric input of a closed form (face offset h, start x0 and v0, strike distance a,
@@ -27,7 +27,7 @@ from perga.analytic.impact import (
 )
 from perga.analytic.sliding import BladeSlide, frictionless_exit
 from perga.case import Case, load_case
-from perga.engine import Simulation, build_scene
+from perga.engine import Simulation
 from perga.model.from_case import scene_spec
 
 CASES = Path(__file__).resolve().parent / "cases" / "closed-form"
@@ -35,7 +35,7 @@ REQUIRED = 1e-3  # the issue's requirement: relative error <= 1e-3 at the bundle
 
 
 def _simulation(case: Case, **kwargs) -> Simulation:
-    return Simulation(build_scene(scene_spec(case)), **kwargs)
+    return Simulation(scene_spec(case), **kwargs)
 
 
 def _cross(a, b) -> float:

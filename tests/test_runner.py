@@ -138,14 +138,13 @@ def test_real_ctrl_c_leaves_a_readable_run(tmp_path):
 
 
 def test_non_finite_state_stops_with_a_diagnostic(tmp_path):
-    from perga.engine.machine import build_scene
     from perga.engine.simulation import Simulation
     from perga.model.from_case import scene_spec
     from perga.runner import check_granules
 
     case = load_case(short_case(tmp_path))
-    sim = Simulation(build_scene(scene_spec(case)))
+    sim = Simulation(scene_spec(case))
     sim.step()
-    sim.scene.granule_bodies[0].velocity = (float("nan"), 0.0)
+    sim.contacts.bodies.granule_bodies[0].velocity = (float("nan"), 0.0)
     with pytest.raises(RunStoppedError, match=r"step 1 .* granule 0 has a non-finite .* reduce"):
-        check_granules(sim, case.chamber.radius, case.chamber.wall_thickness)
+        check_granules(sim.frame(), case.chamber.radius, case.chamber.wall_thickness, sim.dt)

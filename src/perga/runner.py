@@ -1,11 +1,12 @@
 """``perga run``: a case file through the engine into a run directory.
 
-Path of a case: ``load_case`` (validation) -> ``scene_spec`` -> ``build_scene`` ->
-``Simulation`` stepped at the case's dt; after every step the phase-locked frame clock decides
-whether the recorders write (so the last frame is always written at the end). The run directory
-holds the case file as run, one CSV per recorder (flushed as written), and ``summary.json``,
-which is written whatever happens: completed, interrupted (Ctrl-C) or failed (NaN, a granule
-that left the chamber, an error), with the reason.
+Path of a case: ``load_case`` (validation) -> ``scene_spec`` (the system) -> ``Simulation``
+stepped at its machine step; after every step the phase-locked frame clock decides whether the
+simulation's frame goes to the recorders (so the last frame is always written at the end). The
+run directory holds the case file as run, ``scene.json`` (the system's geometry), one CSV per
+recorder (flushed as written), and ``summary.json``, which is written whatever happens:
+completed, interrupted (Ctrl-C) or failed (NaN, a granule that left the chamber, an error),
+with the reason.
 """
 
 from __future__ import annotations
@@ -22,14 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from perga.case.parts import chamber_geometry
 from perga.case.schema import Case
-from perga.case.timestep import step_plan
-from perga.contact.soft.model import SoftSimulation
-from perga.engine.machine import build_scene
 from perga.engine.simulation import Simulation
+from perga.model.frame import Frame
 from perga.model.from_case import scene_spec
 from perga.output.recorders import RECORDERS, PhaseLock, Recorder
+from perga.output.scene_file import write_scene
 
 
 class RunStoppedError(Exception):
@@ -68,25 +67,25 @@ def prepare_directory(directory: Path, overwrite: bool) -> None:
     directory.mkdir(parents=True, exist_ok=True)
 
 
-def check_granules(sim: Simulation, chamber_radius: float, wall_thickness: float) -> None:
+def check_granules(frame: Frame, chamber_radius: float, wall_thickness: float, dt: float) -> None:
     """Raise RunStoppedError for a non-finite state or a granule outside the chamber wall
     (farther from the axis than the wall's farthest inner point, ``chamber_radius``, plus its
-    thickness)."""
-    p, v = sim.granule_positions(), sim.granule_velocities()
+    thickness); ``dt`` (s) is named in the remedy."""
+    p, v = frame.granules.positions, frame.granules.velocities
     bad = np.nonzero(~np.all(np.isfinite(np.hstack((p, v))), axis=1))[0]
     if bad.size:
         raise RunStoppedError(
-            f"step {sim.steps} (t = {sim.time:.6g} s): granule {bad[0]} has a non-finite "
-            f"position or velocity; reduce solver.dt (now {sim.dt:.3g} s)"
+            f"step {frame.step} (t = {frame.time:.6g} s): granule {bad[0]} has a non-finite "
+            f"position or velocity; reduce solver.dt (now {dt:.3g} s)"
         )
     r = np.hypot(p[:, 0], p[:, 1])
     out = np.nonzero(r > chamber_radius + wall_thickness)[0]
     if out.size:
         i = out[0]
         raise RunStoppedError(
-            f"step {sim.steps} (t = {sim.time:.6g} s): granule {i} left the chamber "
+            f"step {frame.step} (t = {frame.time:.6g} s): granule {i} left the chamber "
             f"(r = {r[i]:.4g} m > wall at {chamber_radius:g} m + {wall_thickness:g} m): it "
-            f"tunnelled through the wall; reduce solver.dt (now {sim.dt:.3g} s) or increase "
+            f"tunnelled through the wall; reduce solver.dt (now {dt:.3g} s) or increase "
             "chamber.wall_thickness"
         )
 
@@ -132,30 +131,27 @@ def run_case(
         spec = scene_spec(case)
         record = case.output.record
         options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
-        sim = (
-            SoftSimulation.from_spec(spec, **options)
-            if spec.soft
-            else Simulation(build_scene(spec), **options)
-        )
-        plan = step_plan(case)
+        sim = Simulation(spec, **options)
         summary.dt, summary.granules, summary.hammers = (
-            spec.dt,
+            spec.granule_dt,
             len(spec.granules),
             len(spec.hammers),
         )
-        summary.time_step = asdict(plan) | {"contact_model": case.contact_model.kind}
-        recorders = [RECORDERS[name](directory) for name in record]
+        assert spec.plan is not None and spec.chamber is not None
+        summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
+        write_scene(directory, spec)
+        recorders = [RECORDERS[name](directory, spec) for name in record]
         frames = PhaseLock(case.output.every)
         n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-        wall = chamber_geometry(case)
-        assert wall is not None and case.chamber is not None
-        thickness = case.chamber.wall_thickness
+        outer, thickness = spec.chamber.outer_radius, spec.chamber.wall_thickness
         report_every = max(1, n_steps // 200)
+        contacts = "vtk" in record
 
         def write_frame() -> None:
-            check_granules(sim, wall.outer_radius, thickness)
+            frame = sim.frame(contacts=contacts)
+            check_granules(frame, outer, thickness, sim.dt)
             for recorder in recorders:
-                recorder.record(sim)
+                recorder.record(frame, sim.impacts)
             summary.frames += 1
 
         frames.due(0.0)

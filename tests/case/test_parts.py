@@ -15,15 +15,16 @@ import pytest
 from perga.case import CaseError, load_case
 from perga.cli import main
 from perga.contact.soft.machine import MachinePolygons
-from perga.contact.soft.model import SoftSimulation
-from perga.engine import ContactSpec, GranuleSpec, RotorSpec, SceneSpec, Simulation, build_scene
+from perga.engine import Simulation
+from perga.engine.machine import build_machine
 from perga.geometry.disc_polygon import CORNER, SMOOTH_JOINT
 from perga.geometry.outline import read_outline
 from perga.geometry.polygon import signed_area
 from perga.geometry.units import GeometryError
 from perga.geometry.wall import circumscribed, wall_pieces
+from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
 from perga.model.from_case import scene_spec
-from perga.model.spec import ChamberSpec, SoftContactSpec
+from perga.model.spec import ChamberSpec, RigidContactSpec, SoftContactSpec
 
 ROOT = Path(__file__).resolve().parents[2]
 ROUND = read_outline(ROOT / "geometry" / "chamber_round.txt", "mm").vertices
@@ -89,11 +90,13 @@ def _wall_hit(soft: bool, e: float, v0: float = 3.0, at_joint: float | None = No
         hammers=(),
         granules=(GranuleSpec(tuple(start), tuple(v0 * normal), RADIUS, MASS, "bb"),),
         contacts=(ContactSpec("bb", "steel", e, 0.3),),
-        dt=1e-6 if soft else 1e-5,
+        granule_dt=1e-6 if soft else 1e-5,
         chamber=ChamberSpec(0.3, 0.02, "steel", outline=tuple(map(tuple, ROUND))),
-        soft=SoftContactSpec("linear", 1.6e-4 * (math.pi / 1e-4) ** 2) if soft else None,
+        contact_model=SoftContactSpec("linear", 1.6e-4 * (math.pi / 1e-4) ** 2)
+        if soft
+        else RigidContactSpec(),
     )
-    sim = SoftSimulation.from_spec(spec) if soft else Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(2 * 0.002 / v0)
     return float(sim.granule_velocities()[0] @ normal) / v0
 
@@ -155,7 +158,7 @@ def test_machine_polygons_keep_each_bodys_features(tmp_path):
     kind column with the vertex indices lost every corner of hammers 1-7 and of the wall: the
     ledger of the 0.3 s run closed to −784 %.)"""
     case = load_case(_short("plate-hammers-soft.toml", tmp_path, 0.3))
-    machine = MachinePolygons(build_scene(scene_spec(case)))
+    machine = MachinePolygons(build_machine(scene_spec(case)))
     p = machine.polygons
     kinds = p.corner[:, 2]
     assert set(np.unique(kinds)) <= {0, CORNER, SMOOTH_JOINT}

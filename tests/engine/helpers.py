@@ -6,16 +6,8 @@ import math
 
 import numpy as np
 
-from perga.engine import (
-    ContactSpec,
-    EffectsSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-    Simulation,
-    build_scene,
-)
+from perga.engine import Simulation
+from perga.model import ContactSpec, EffectsSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 
 
 def rectangle(x0: float, x1: float, y0: float, y1: float) -> tuple[tuple[float, float], ...]:
@@ -89,10 +81,10 @@ def blade_exit(
         hammers=(blade,),
         granules=(granule,),
         contacts=(ContactSpec("beebread", "steel", restitution=0.0, friction=face_friction),),
-        dt=dt,
+        granule_dt=dt,
         effects=effects or EffectsSpec(),
     )
-    sim = Simulation(build_scene(spec), record_impacts=False, track_energy=False)
+    sim = Simulation(spec, record_impacts=False, track_energy=False)
     previous = (sim.time, *rotating_frame(sim, omega))
     offset = 0.0
     while True:

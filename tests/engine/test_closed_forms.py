@@ -7,15 +7,14 @@ import pytest
 
 from perga.analytic.impact import oblique_impact
 from perga.analytic.sliding import BladeSlide
-from perga.engine import (
+from perga.engine import Simulation
+from perga.model import (
     ContactSpec,
     EffectsSpec,
     FloorFrictionSpec,
     GranuleSpec,
     RotorSpec,
     SceneSpec,
-    Simulation,
-    build_scene,
 )
 from tests.engine.helpers import blade_exit, plate
 
@@ -81,9 +80,9 @@ def test_oblique_impact_on_fixed_wall(v_t: float, e: float, f: float, sticks: bo
         hammers=(wall,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=e, friction=f),),
-        dt=1e-5,
+        granule_dt=1e-5,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(2e-5)
     exact = oblique_impact(m, RADIUS, v_n, v_t, e, f, shape="disc")
     assert exact.sticks is sticks

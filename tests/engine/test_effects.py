@@ -9,7 +9,9 @@ import numpy as np
 import pymunk
 import pytest
 
-from perga.engine import (
+from perga.engine import Simulation, units
+from perga.engine.effects import AirDrag, FloorFriction
+from perga.model import (
     AirDragSpec,
     ChamberSpec,
     ContactSpec,
@@ -18,13 +20,8 @@ from perga.engine import (
     FloorFrictionSpec,
     GranuleSpec,
     RotorSpec,
-    Scene,
     SceneSpec,
-    Simulation,
-    build_scene,
-    units,
 )
-from perga.engine.effects import AirDrag, FloorFriction
 from tests.engine.helpers import plate
 
 EFFECTS = {
@@ -35,7 +32,7 @@ EFFECTS = {
 }
 
 
-def _scene(**effects: object) -> Scene:
+def _sim(**effects: object) -> Simulation:
     hammers = tuple(
         plate(
             -0.01,
@@ -59,45 +56,46 @@ def _scene(**effects: object) -> Scene:
         hammers=hammers,
         granules=granules,
         contacts=(ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "wall", 0.5, 0.3)),
-        dt=1e-5,
+        granule_dt=1e-5,
         chamber=ChamberSpec(radius=0.25, wall_thickness=0.02, material="wall"),
         effects=EffectsSpec(**effects),  # type: ignore[arg-type]
     )
-    return build_scene(spec)
+    return Simulation(spec)
 
 
-def _trace(scene: Scene) -> dict[str, object]:
+def _trace(sim: Simulation) -> dict[str, object]:
     """Everything an effect could leave in the space."""
+    space = sim.machine.space
+    handlers = sim.contacts.bodies.handlers  # type: ignore[attr-defined]
     return {
-        "handlers": sorted(scene._listeners),
-        "callbacks": sum(len(v) for v in scene._listeners.values()),
-        "constraints": len(scene.space.constraints),
-        "constraint_hooks": [(c.pre_solve, c.post_solve) for c in scene.space.constraints],
-        "velocity_funcs": [
-            b.velocity_func is pymunk.Body.update_velocity for b in scene.space.bodies
-        ],
-        "rotor_type": scene.rotor.body_type,
-        "effects": len(scene.effects),
-        "kicked": _kicked(scene),
+        "handlers": sorted(handlers),
+        "callbacks": sum(len(v) for v in handlers.values()),
+        "constraints": len(space.constraints),
+        "constraint_hooks": [(c.pre_solve, c.post_solve) for c in space.constraints],
+        "velocity_funcs": [b.velocity_func is pymunk.Body.update_velocity for b in space.bodies],
+        "rotor_type": sim.machine.rotor.body_type,
+        "effects": len(sim.machine.effects),
+        "kicked": _kicked(sim),
     }
 
 
-def _kicked(scene: Scene) -> list[int]:
-    """Bodies (indices in space.bodies, static body last) whose state the effects' per-step
-    hook (run by Simulation.step before space.step) changes, run once here."""
-    bodies = [*scene.space.bodies, scene.space.static_body]
+def _kicked(sim: Simulation) -> list[int]:
+    """Bodies (indices in space.bodies, static body last) whose state the effects' kicks (run
+    by Simulation.step before everything else) change, run once here."""
+    space = sim.machine.space
+    bodies = [*space.bodies, space.static_body]
 
     def state() -> list[tuple[float, ...]]:
         return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
 
     before = state()
-    for effect in scene.effects:
-        effect.before_step(units.to_internal(scene.spec.dt, units.TIME))
+    if sim.kicks is not None:
+        sim.kicks.run(units.to_internal(sim.dt, units.TIME))
     return [i for i, (a, b) in enumerate(zip(before, state(), strict=True)) if a != b]
 
 
 def test_no_effect_leaves_no_trace() -> None:
-    bare = _trace(_scene())
+    bare = _trace(_sim())
     assert bare["constraints"] == 1  # the hinge's pivot only
     assert bare["constraint_hooks"] == [(None, None)]
     assert all(bare["velocity_funcs"])
@@ -109,7 +107,7 @@ def test_no_effect_leaves_no_trace() -> None:
 @pytest.mark.parametrize("name", sorted(EFFECTS))
 def test_each_effect_installs_only_itself(name: str) -> None:
     """Listing one effect changes exactly what that effect is made of, and no handler."""
-    bare, one = _trace(_scene()), _trace(_scene(**{name: EFFECTS[name]}))
+    bare, one = _trace(_sim()), _trace(_sim(**{name: EFFECTS[name]}))
     changed = {key for key in bare if bare[key] != one[key]}
     expected = {
         "floor_friction": {"kicked", "effects"},
@@ -119,31 +117,31 @@ def test_each_effect_installs_only_itself(name: str) -> None:
     }[name]
     assert changed == expected
     if "kicked" in changed:  # the granules' velocities, nothing else of any body
-        scene = _scene(**{name: EFFECTS[name]})
-        bodies = [*scene.space.bodies, scene.space.static_body]
-        assert {bodies[i] for i in _trace(scene)["kicked"]} == set(scene.granule_bodies)  # type: ignore[attr-defined]
+        sim = _sim(**{name: EFFECTS[name]})
+        bodies = [*sim.machine.space.bodies, sim.machine.space.static_body]
+        granules = set(sim.contacts.bodies.granule_bodies)  # type: ignore[attr-defined]
+        assert {bodies[i] for i in _trace(sim)["kicked"]} == granules  # type: ignore[attr-defined]
 
 
 def test_both_kicks_share_one_runner() -> None:
-    """Floor friction and air drag together: one batch read and write per step, run by the
-    first kick in registry order (floor friction, then drag on the result)."""
-    scene = _scene(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"])
-    floor, drag = scene.effects
+    """Floor friction and air drag together: one batch read and write per step, by one runner
+    (floor friction, then drag on the result)."""
+    sim = _sim(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"])
+    floor, drag = sim.machine.effects
     assert isinstance(floor, FloorFriction) and isinstance(drag, AirDrag)
-    assert floor._runner is not None and drag._runner is None
-    assert floor._runner.kicks == [floor, drag]
+    assert sim.kicks is not None and sim.kicks.kicks == [floor, drag]
 
 
-def _per_granule(scene: Scene, dt: float) -> tuple[list[pymunk.Vec2d], float, float, float]:
+def _per_granule(sim: Simulation, dt: float) -> tuple[list[pymunk.Vec2d], float, float, float]:
     """Reference: the kicks as the scalar per-body formulas of their docstrings (floor friction
     then drag), and the energy each removes / the floor supplies, internal units."""
-    spec = scene.spec.effects
+    spec = sim.spec.effects
     assert spec.floor_friction is not None and spec.air_drag is not None
     a = units.to_internal(spec.floor_friction.friction * spec.floor_friction.gravity,
                           units.ACCELERATION)  # fmt: skip
-    w = scene.rotor.angular_velocity
+    w = sim.machine.rotor.angular_velocity
     out, removed, supplied, dragged = [], 0.0, 0.0, 0.0
-    for g, body in zip(scene.spec.granules, scene.granule_bodies, strict=True):
+    for g, body in zip(sim.spec.granules, sim.contacts.bodies.granule_bodies, strict=True):
         v, p, m = body.velocity, body.position, body.mass
         floor = pymunk.Vec2d(-w * p.y, w * p.x)
         relative = v - floor
@@ -187,20 +185,22 @@ def test_kicks_match_the_per_granule_formulas() -> None:
         )
     ]
     spec = dataclasses.replace(
-        _scene().spec,
+        _sim().spec,
         granules=tuple(granules),
         effects=EffectsSpec(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"]),
     )
-    scene = build_scene(spec)
-    w, co_moving = scene.rotor.angular_velocity, scene.granule_bodies[1]
+    sim = Simulation(spec)
+    bodies = sim.contacts.bodies.granule_bodies  # type: ignore[attr-defined]
+    w, co_moving = sim.machine.rotor.angular_velocity, bodies[1]
     co_moving.velocity = (-w * co_moving.position.y, w * co_moving.position.x)  # exactly
-    dt = units.to_internal(spec.dt, units.TIME)
-    expected, removed, supplied, dragged = _per_granule(scene, dt)
-    floor, drag = scene.effects
-    floor.before_step(dt)
-    for body, v in zip(scene.granule_bodies, expected, strict=True):
+    dt = units.to_internal(spec.granule_dt, units.TIME)
+    expected, removed, supplied, dragged = _per_granule(sim, dt)
+    floor, drag = sim.machine.effects
+    assert sim.kicks is not None
+    sim.kicks.run(dt)
+    for body, v in zip(bodies, expected, strict=True):
         np.testing.assert_allclose(tuple(body.velocity), tuple(v), rtol=1e-14, atol=1e-300)
-    assert tuple(scene.granule_bodies[0].velocity) == tuple(expected[0])  # stopped on the floor
+    assert tuple(bodies[0].velocity) == tuple(expected[0])  # stopped on the floor
     assert floor.removed == pytest.approx(removed * units.ENERGY, rel=1e-14)
     assert floor.supplied == pytest.approx(supplied * units.ENERGY, rel=1e-14)
     assert drag.removed == pytest.approx(dragged * units.ENERGY, rel=1e-14)
@@ -218,9 +218,9 @@ def test_air_drag_closed_form() -> None:
                           material="bb")  # fmt: skip
     spec = SceneSpec(
         rotor=RotorSpec(omega=0.0, radius=0.2), hammers=(), granules=(granule,), contacts=(),
-        dt=1e-4, effects=EffectsSpec(air_drag=AirDragSpec(rho, cd, th)),
+        granule_dt=1e-4, effects=EffectsSpec(air_drag=AirDragSpec(rho, cd, th)),
     )  # fmt: skip
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(duration)
     (v,) = sim.granule_velocities()
     (p,) = sim.granule_positions()
@@ -250,10 +250,10 @@ def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:
             granules=(granule,),
             contacts=(ContactSpec("bb", "steel", 0.5, 0.0),)
             + ((ContactSpec("bb", "wall", 0.5, 0.0),) if chamber else ()),
-            dt=1e-5,
+            granule_dt=1e-5,
             chamber=chamber,
         )
-        runs.append(Simulation(build_scene(spec)))
+        runs.append(Simulation(spec))
         runs[-1].run(4e-3)
     sim, open_rotor = runs
     v = sim.granule_velocities()[0]
@@ -261,12 +261,12 @@ def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:
     assert sim.energy().contact_dissipation == pytest.approx(0.5 * 50e-6 * (25 - 6.25), rel=1e-9)
     # the hammer moves exactly as without the wall
     assert sim.hammer_swing_angles().tolist() == open_rotor.hammer_swing_angles().tolist()
-    assert len(sim.scene.wall_shapes) == 96
+    assert len(sim.contacts.bodies.wall_shapes) == 96
 
 
 def test_chamber_pair_needs_contact_parameters() -> None:
     granule = GranuleSpec(position=(0.1, 0.0), velocity=(0, 0), radius=0.002, mass=1e-5,
                           material="bb")  # fmt: skip
     with pytest.raises(ValueError, match=r"no contact parameters for materials \['bb', 'wall'\]"):
-        SceneSpec(RotorSpec(10.0, 0.2), (), (granule,), (), dt=1e-5,
+        SceneSpec(RotorSpec(10.0, 0.2), (), (granule,), (), granule_dt=1e-5,
                   chamber=ChamberSpec(0.25, 0.02, "wall"))  # fmt: skip

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from perga.analytic.hammer import PlateHammer, swing_frequency, swing_period
-from perga.engine import RotorSpec, SceneSpec, Simulation, build_scene
+from perga.engine import Simulation
+from perga.model import RotorSpec, SceneSpec
 from tests.engine.helpers import plate
 
 # Measured: the period matches the exact pendulum period (elliptic integral) to 2.0e-5 at
@@ -31,9 +32,9 @@ def test_swing_frequency() -> None:
     assert hammer.moment_about_hinge == pytest.approx(ph.inertia_about_hinge, rel=1e-12)
     spec = SceneSpec(
         rotor=RotorSpec(omega=omega, radius=0.2), hammers=(hammer,), granules=(), contacts=(),
-        dt=DT,
+        granule_dt=DT,
     )  # fmt: skip
-    sim = Simulation(build_scene(spec), record_impacts=False)
+    sim = Simulation(spec, record_impacts=False)
     big_omega = swing_frequency(omega, ph.mass, R, l_cg, ph.inertia_about_hinge)
     period = swing_period(amplitude, omega, ph.mass, R, l_cg, ph.inertia_about_hinge)
     n = int(3.2 * period / DT)

@@ -1,4 +1,5 @@
-"""Scene construction: validation, filters, only-what-is-asked-for, unit round trips."""
+"""The machine's construction (and the system spec's validation): filters,
+only-what-is-asked-for, unit round trips."""
 
 from __future__ import annotations
 
@@ -6,16 +7,9 @@ import math
 
 import pytest
 
-from perga.engine import (
-    ContactSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-    Simulation,
-    build_scene,
-)
+from perga.engine import Simulation
 from perga.geometry.polygon import is_convex, signed_area
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 from tests.engine.helpers import plate, rectangle
 
 
@@ -30,17 +24,17 @@ def _head_on(granule_collisions: bool, contacts: tuple[ContactSpec, ...]) -> Sim
         hammers=(),
         granules=granules,
         contacts=contacts,
-        dt=1e-5,
+        granule_dt=1e-5,
         granule_collisions=granule_collisions,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(2e-3)
     return sim
 
 
 def test_granule_collisions_off_leaves_no_handler_and_granules_pass() -> None:
     sim = _head_on(False, ())
-    assert sim.scene.pairs == []
+    assert sim.contacts.bodies.pairs == []
     # exact: no contact ever touches them, velocities are untouched
     assert sim.granule_velocities()[:, 0].tolist() == [5.0, -5.0]
 
@@ -58,11 +52,12 @@ def test_missing_and_unused_pairs_are_errors() -> None:
     hammer = plate(0, 0.1, -0.01, 0.01, 0.05, hinge_radius=0.1, angle_on_rotor=0.0,
                    mount="hinged", material="steel")  # fmt: skip
     with pytest.raises(ValueError, match=r"no contact parameters for materials \['bb', 'steel'\]"):
-        SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (granule,), (), dt=1e-5)
+        SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (granule,), (), granule_dt=1e-5)
     with pytest.raises(ValueError, match="unused"):
         SceneSpec(
             RotorSpec(10.0, 0.2), (hammer,), (granule,),
-            (ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "bb", 0.5, 0.3)), dt=1e-5,
+            (ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "bb", 0.5, 0.3)),
+            granule_dt=1e-5,
         )  # fmt: skip
 
 
@@ -84,18 +79,17 @@ def test_hinged_hammer_pose_and_mass_properties() -> None:
     omega, R, phi = 50.0, 0.1, 0.7
     hammer = plate(-0.01, 0.09, -0.01, 0.01, 0.078, hinge_radius=R, angle_on_rotor=phi,
                    mount="hinged", material="steel", swing_angle=0.1)  # fmt: skip
-    spec = SceneSpec(RotorSpec(omega, 0.2), (hammer,), (), (), dt=1e-5)
-    scene = build_scene(spec)
-    body = scene.hammer_bodies[0]
+    spec = SceneSpec(RotorSpec(omega, 0.2), (hammer,), (), (), granule_dt=1e-5)
+    sim = Simulation(spec)
+    body = sim.machine.hammer_bodies[0]
     assert body.mass * 1e-3 == pytest.approx(0.078, rel=1e-12)
     assert body.moment * 1e-9 == pytest.approx(hammer.moment_about_centre, rel=1e-12)
     assert tuple(body.position * 1e-3) == pytest.approx((R * math.cos(phi), R * math.sin(phi)))
     assert body.angular_velocity * 1e3 == pytest.approx(omega, rel=1e-12)
-    sim = Simulation(scene)
     assert sim.hammer_swing_angles()[0] == pytest.approx(0.1, rel=1e-12)
     # the pivot joint is in the space, and there are no collision handlers without granules
-    assert len(scene.joints) == 1
-    assert scene.pairs == []
+    assert len(sim.machine.hinges) == 1
+    assert sim.contacts.bodies.pairs == []  # type: ignore[attr-defined]
 
 
 def _notched(outline) -> HammerSpec:
@@ -116,12 +110,13 @@ def test_concave_outline_becomes_convex_pieces_on_one_body() -> None:
     assert sum(signed_area(p) for p in hammer.pieces) == pytest.approx(
         signed_area(notch), rel=1e-12
     )
-    scene = build_scene(SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (), (), dt=1e-5))
-    shapes = scene.hammer_shapes[0]
+    sim = Simulation(SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (), (), granule_dt=1e-5))
+    shapes = sim.machine.hammer_shapes[0]
     assert len(shapes) == 2
-    assert all(s.body is scene.hammer_bodies[0] for s in shapes)
-    assert all(scene.shape_owner[s] == ("hammer", 0) for s in shapes)
-    assert len(scene.hammer_outlines[0]) == 5
+    assert all(s.body is sim.machine.hammer_bodies[0] for s in shapes)
+    owner = sim.contacts.bodies.shape_owner  # type: ignore[attr-defined]
+    assert all(owner[s] == ("hammer", 0) for s in shapes)
+    assert len(sim.machine.hammer_outlines[0]) == 5
 
 
 def test_self_intersecting_outline_is_refused() -> None:

@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from perga.engine import EffectsSpec, RotorSpec, SceneSpec, Simulation, build_scene
+from perga.engine import Simulation
+from perga.model import EffectsSpec, RotorSpec, SceneSpec
 
 from .helpers import plate
 
@@ -25,11 +26,11 @@ def _sim(swing_limit, dt=1e-4):
         hammers=(hammer,),
         granules=(),
         contacts=(),
-        dt=dt,
+        granule_dt=dt,
         gravity=(0.0, -9.80665),
         effects=EffectsSpec(),
     )
-    return Simulation(build_scene(spec), record_impacts=False)
+    return Simulation(spec, record_impacts=False)
 
 
 def test_hammer_swings_to_its_stop_and_stays():

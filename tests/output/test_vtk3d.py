@@ -25,7 +25,7 @@ from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import rotor_geometry
 from perga.case.schema import Case
 from perga.cli import main
-from perga.engine import Simulation, build_scene
+from perga.engine import Simulation
 from perga.geometry.polygon import outline_or_circle, signed_area
 from perga.geometry.wall import wall_pieces
 from perga.model.from_case import scene_spec
@@ -64,15 +64,15 @@ def run3d(tmp_path_factory: pytest.TempPathFactory) -> Run3D:
     drawing = dataclasses.replace(
         spec.drawing, hammer_thickness=tuple(0.003 + 0.001 * k for k in range(len(spec.hammers)))
     )
-    sim = Simulation(build_scene(dataclasses.replace(spec, drawing=drawing)))
+    sim = Simulation(dataclasses.replace(spec, drawing=drawing))
     directory = tmp_path_factory.mktemp("run3d")
-    recorder = VtkRecorder(directory)
+    recorder = VtkRecorder(directory, sim.spec)
     frames = []
     for k in range(FRAMES):
         for _ in range(STEPS_PER_FRAME if k else 0):
             sim.step()
         frames.append(snapshot(sim))
-        recorder.record(sim)
+        recorder.record(sim.frame(), sim.impacts)
     recorder.close()
     return Run3D(sim, directory / "vtk", frames, drawing)
 
@@ -121,7 +121,7 @@ def part_cells(mesh: pv.UnstructuredGrid, part: int) -> tuple[np.ndarray, np.nda
 
 def test_machine3d_round_trip(run3d: Run3D) -> None:
     d = run3d.drawing
-    spec = run3d.sim.scene.spec
+    spec = run3d.sim.spec
     n = len(spec.hammers)
     thickness = [*d.hammer_thickness, d.rotor_thickness]
     entries = read_pvd(run3d.directory / "machine3d.pvd")
@@ -167,7 +167,7 @@ def test_machine3d_round_trip(run3d: Run3D) -> None:
 
 
 def test_chamber3d_is_the_closed_wall(run3d: Run3D) -> None:
-    c = run3d.sim.scene.spec.chamber
+    c = run3d.sim.spec.chamber
     h = run3d.drawing.chamber_height
     m, p = both(run3d.directory / "chamber3d.vtu")
     np.testing.assert_array_equal(m.points, p.points)

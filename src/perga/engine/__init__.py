@@ -1,38 +1,9 @@
-"""The simulation engine: SceneSpec (SI, :mod:`.spec`) -> Scene (pymunk objects, :mod:`.scene`,
-optional physics from :mod:`.effects`) -> Simulation (stepping, impact recording, energy ledger
-from :mod:`.energy`, state in SI, :mod:`.simulation`)."""
+"""The simulation engine: the machine (rotor, hammers, joints, effects) in Pymunk
+(:mod:`.machine`, :mod:`.effects`), the energy ledger (:mod:`.energy`), and the one
+:class:`~perga.engine.simulation.Simulation` that steps the machine with a contact model
+(:mod:`perga.contact`)."""
 
-from perga.engine.energy import EnergyLedger
-from perga.engine.machine import Scene, build_scene
-from perga.engine.simulation import Impact, ImpactRecorder, Simulation
-from perga.model.spec import (
-    AirDragSpec,
-    ChamberSpec,
-    ContactSpec,
-    DriveSpec,
-    EffectsSpec,
-    FloorFrictionSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-)
+from perga.engine.machine import Machine, build_machine
+from perga.engine.simulation import Simulation
 
-__all__ = [
-    "AirDragSpec",
-    "ChamberSpec",
-    "ContactSpec",
-    "DriveSpec",
-    "EffectsSpec",
-    "EnergyLedger",
-    "FloorFrictionSpec",
-    "GranuleSpec",
-    "HammerSpec",
-    "Impact",
-    "ImpactRecorder",
-    "RotorSpec",
-    "Scene",
-    "SceneSpec",
-    "Simulation",
-    "build_scene",
-]
+__all__ = ["Machine", "Simulation", "build_machine"]

@@ -1,38 +1,26 @@
-"""Optional physics, built by :func:`~perga.engine.machine.build_scene` only when the spec lists
-it (design §3): an absent effect leaves no per-step hook, constraint or callback.
+"""Optional physics, built with the machine (:func:`~perga.engine.machine.build_machine`) only
+when the spec lists it (design §3): an absent effect leaves no per-step hook, constraint or
+callback.
 
 Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpec` field name.
 Effects that act on granule velocities (floor friction, air drag) are *kicks*: array operations
-on all granules at once, with no per-granule Python. Once per step, **before** Chipmunk's
-``space.step`` (:meth:`Effect.before_step`, called by :meth:`~perga.engine.simulation.
-Simulation.step`), one :class:`~perga.contact.rigid.batch.GranuleWriter` reads every granule's
-velocity (and position, for the co-rotating floor) in one ``pymunk.batch`` pass, every listed kick
-changes the velocity arrays in registry order, each a velocity change over dt that never
-reverses the velocity it opposes, and one batch write sets them (every other body keeps its
-velocity bit for bit). The granules keep Chipmunk's default velocity function (gravity).
-Effects that are constraints (hinge friction, drive) are pymunk motors.
+on all granules at once, with no per-granule Python. Once per machine step, **before** the
+contact model moves anything (:meth:`~perga.engine.simulation.Simulation.step`), a
+:class:`KickRunner` reads every granule's velocity (and position, for the co-rotating floor)
+from the contact model in one pass, every listed kick changes the velocity arrays in registry
+order, each a velocity change over dt that never reverses the velocity it opposes, and one
+write sets them. Effects that are constraints (hinge friction, drive) are pymunk motors.
 
-Where the kick sits (an operator split). Chipmunk's step is drift (positions with the current
-velocities), collision detection, then gravity and the contact/joint impulses. The kicks used
-to run inside the step, after the drift, as a velocity function; they now run before the
-step, so a step is kick (at x_n, v_n), drift (with the kicked velocity), solve. Both are first
-order in dt; the kick now sees the position at the start of the step rather than the drifted
-one, and it is applied before, not after, the restitution targets of the step's contacts are
-taken (so an impact's approach speed includes the step's friction and drag). Measured effect
-on the closed forms (tests/engine/test_closed_forms.py, tests/engine/test_energy.py), relative
-errors inside the step / before the step: the co-rotating floor on a blade (BladeSlide) exit
-time 5.0e-5 / 6.0e-5 and exit speed −8.8e-5 / −7.4e-5 at dt = 5e-6 s (8.5e-5 / 1.05e-4 and
-−1.6e-4 / −1.3e-4 at 1e-5 s: still first order); a granule stopping on the stationary floor
-(dt = 1e-4 s) travels v²/(2μg) · (1 + 2.0e-4) / (1 − 2.0e-4) (x_{n+1} = x_n + v'_n dt with the
-kicked v'_n), and its friction equals the initial kinetic energy to rounding (1.8e-15) either
-way; air drag's velocities are exact either way (the kick integrates dv/dt = −k|v|v exactly
-over dt), its distance ln(1 + k v0 t)/k is off by +4.4e-5 / −4.4e-5 at 1e-4 s.
+Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
+step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
+the position at the start of the step, and an impact's approach speed includes the step's
+friction and drag (docs/validation.md has the measured effect on the closed forms).
 
 Energy: every effect counts, in J, the energy it removed (``removed`` >= 0) and the work the
 rotor did through it (``supplied``, only the co-rotating floor), each from its own kicks or
 impulses, never from a global balance. The ledger (:mod:`perga.engine.energy`) sums them by
 ``term``. A kick's energy is the exact change it made, granule by granule, summed over the
-granules in numpy (so only the summation order differs from a per-granule loop).
+granules in numpy.
 """
 
 from __future__ import annotations
@@ -44,12 +32,12 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
-from perga.contact.rigid.batch import GranuleWriter
 from perga.engine import units as u
 from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
-    from perga.engine.machine import Scene
+    from perga.contact.protocol import GranuleKinematics
+    from perga.engine.machine import Machine
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
@@ -79,25 +67,15 @@ class Effect:
         """Work the rotor has done on the bodies through this effect since t = 0, J."""
         return self._supplied * u.ENERGY
 
-    def before_step(self, dt: float) -> None:
-        """Called by ``Simulation.step`` before every ``space.step`` (``dt`` internal units).
-        Does nothing unless the effect is the kick that runs the step's kicks."""
-
 
 class Kick(Effect):
-    """An effect that changes all granules' velocities once per step, before ``space.step``,
-    as array operations (module docstring). :func:`build_effects` gives the first kick of a
-    scene the shared :class:`_Kicks` runner; the others are run by it."""
+    """An effect that changes all granules' velocities once per step, before the contacts and
+    Chipmunk's step, as array operations (module docstring), run by a :class:`KickRunner`."""
 
     def __init__(self) -> None:
         super().__init__()
         self.needs_positions = False
         """Whether :meth:`kick` needs the granules' positions."""
-        self._runner: _Kicks | None = None
-
-    def before_step(self, dt: float) -> None:
-        if self._runner is not None:
-            self._runner.run(dt)
 
     def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
         """The granules' velocities after one step of ``dt`` of this effect (internal units;
@@ -106,19 +84,24 @@ class Kick(Effect):
         raise NotImplementedError
 
 
-class _Kicks:
-    """Runs a scene's kicks: one batch read, each kick in registry order, one batch write."""
+class KickRunner:
+    """Runs the kicks among ``effects`` on the granules of a contact model: one read, each kick
+    in registry order, one write (internal units)."""
 
-    def __init__(self, scene: Scene, kicks: list[Kick]) -> None:
-        self.kicks = kicks
-        self.writer = GranuleWriter(scene)
-        self._positions = any(k.needs_positions for k in kicks)
+    def __init__(self, effects: list[Effect], granules: GranuleKinematics) -> None:
+        self.kicks = [e for e in effects if isinstance(e, Kick)]
+        self.granules = granules
+        self._positions = any(k.needs_positions for k in self.kicks)
+
+    def __bool__(self) -> bool:
+        return bool(self.kicks)
 
     def run(self, dt: float) -> None:
-        if self.writer.count == 0:
+        """Kick every granule over ``dt`` (internal time units)."""
+        if self.granules.count == 0:
             return
-        velocities, positions = self.writer.read_internal(positions=self._positions)
-        self.writer.write_internal_velocities(run_kicks(self.kicks, velocities, positions, dt))
+        velocities, positions = self.granules.read_internal(positions=self._positions)
+        self.granules.write_internal_velocities(run_kicks(self.kicks, velocities, positions, dt))
 
 
 def run_kicks(
@@ -134,12 +117,14 @@ def _speeds(v: FloatArray) -> FloatArray:
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1])
 
 
-def _granule_masses(scene: Scene) -> FloatArray:
+def _granule_masses(machine: Machine) -> FloatArray:
     """Granule masses, internal units, spec order (the granules' bodies hold the same values)."""
-    return np.array([u.to_internal(g.mass, u.MASS) for g in scene.spec.granules], dtype=np.float64)
+    return np.array(
+        [u.to_internal(g.mass, u.MASS) for g in machine.spec.granules], dtype=np.float64
+    )
 
 
-_REGISTRY: dict[str, Callable[[Scene, Any], Effect]] = {}
+_REGISTRY: dict[str, Callable[[Machine, Any], Effect]] = {}
 
 
 def _register(cls: type[Effect]) -> type[Effect]:
@@ -160,15 +145,15 @@ class Drive(Effect):
     name = "drive"
     term = "drive"
 
-    def __init__(self, scene: Scene, spec: DriveSpec) -> None:
+    def __init__(self, machine: Machine, spec: DriveSpec) -> None:
         super().__init__()
-        welded = [h for h in scene.spec.hammers if h.mount == "welded"]
+        welded = [h for h in machine.spec.hammers if h.mount == "welded"]
         moment = spec.inertia + sum(
             h.moment_about_centre + h.mass * (h.centre_on_rotor[0] ** 2 + h.centre_on_rotor[1] ** 2)
             for h in welded
         )
-        mass = 2 * spec.inertia / scene.spec.rotor.radius**2 + sum(h.mass for h in welded)
-        rotor, static = scene.rotor, scene.space.static_body
+        mass = 2 * spec.inertia / machine.spec.rotor.radius**2 + sum(h.mass for h in welded)
+        rotor, static = machine.rotor, machine.space.static_body
         omega = rotor.angular_velocity
         rotor.body_type = pymunk.Body.DYNAMIC
         rotor.mass = u.to_internal(mass, u.MASS)
@@ -177,7 +162,7 @@ class Drive(Effect):
         self.pivot = pymunk.PivotJoint(rotor, static, (0.0, 0.0))
         self.motor = pymunk.SimpleMotor(rotor, static, omega)
         self.motor.max_force = u.to_internal(spec.torque_limit, TORQUE)
-        scene.space.add(self.pivot, self.motor)
+        machine.space.add(self.pivot, self.motor)
 
 
 class _AngularImpulseLosses(Effect):
@@ -214,20 +199,20 @@ class HingeFriction(_AngularImpulseLosses):
     name = "hinge_friction"
     term = "friction"
 
-    def __init__(self, scene: Scene, torque: float) -> None:
+    def __init__(self, machine: Machine, torque: float) -> None:
         super().__init__()
         self.motors: list[pymunk.SimpleMotor] = []
-        for joint in scene.joints:
+        for joint in machine.hinges:
             motor = pymunk.SimpleMotor(joint.b, joint.a, 0.0)
             motor.max_force = u.to_internal(torque, TORQUE)
             motor.collide_bodies = False
             self._watch(motor)
-            scene.space.add(motor)
+            machine.space.add(motor)
             self.motors.append(motor)
 
 
 class SwingStops(_AngularImpulseLosses):
-    """The stops of hinged hammers (``RotaryLimitJoint``, built by the scene when a hammer has
+    """The stops of hinged hammers (``RotaryLimitJoint``, built with the machine when a hammer has
     a ``swing_limit``): a hammer swinging into its stop is stopped by a perfectly inelastic
     angular impulse, whose losses (:class:`_AngularImpulseLosses`) count with the contacts'
     dissipation. Not in the registry: built for the hammers that have stops, not from
@@ -256,12 +241,12 @@ class FloorFriction(Kick):
     name = "floor_friction"
     term = "friction"
 
-    def __init__(self, scene: Scene, spec: FloorFrictionSpec) -> None:
+    def __init__(self, machine: Machine, spec: FloorFrictionSpec) -> None:
         super().__init__()
         self._deceleration = u.to_internal(spec.friction * spec.gravity, u.ACCELERATION)
-        self._rotor = scene.rotor if spec.floor == "corotating" else None
+        self._rotor = machine.rotor if spec.floor == "corotating" else None
         self.needs_positions = self._rotor is not None
-        self._mass = _granule_masses(scene)
+        self._mass = _granule_masses(machine)
 
     def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
         if self._rotor is None:
@@ -296,7 +281,7 @@ class AirDrag(Kick):
     name = "air_drag"
     term = "drag"
 
-    def __init__(self, scene: Scene, spec: AirDragSpec) -> None:
+    def __init__(self, machine: Machine, spec: AirDragSpec) -> None:
         super().__init__()
         self._k = np.array(
             [
@@ -310,11 +295,11 @@ class AirDrag(Kick):
                     / g.mass,
                     1.0 / u.LENGTH,
                 )
-                for g in scene.spec.granules
+                for g in machine.spec.granules
             ],
             dtype=np.float64,
         )
-        self._mass = _granule_masses(scene)
+        self._mass = _granule_masses(machine)
 
     def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
         speed = _speeds(velocities)
@@ -326,18 +311,11 @@ class AirDrag(Kick):
         return velocities * ratio[:, None]
 
 
-def build_effects(scene: Scene) -> list[Effect]:
-    """Build the effects ``scene.spec.effects`` lists, in registry order; if some are kicks on
-    Pymunk granules, the first of them gets the runner (a
-    :class:`~perga.contact.rigid.batch.GranuleWriter`) for all. Soft granules (``spec.soft``) are
-    kicked by their simulation through :func:`run_kicks`."""
-    listed = scene.spec.effects
-    effects = [
-        make(scene, getattr(listed, name))
+def build_effects(machine: Machine) -> list[Effect]:
+    """Build the effects ``machine.spec.effects`` lists, in registry order."""
+    listed = machine.spec.effects
+    return [
+        make(machine, getattr(listed, name))
         for name, make in _REGISTRY.items()
         if getattr(listed, name) is not None
     ]
-    kicks = [e for e in effects if isinstance(e, Kick)]
-    if kicks and scene.spec.soft is None:
-        kicks[0]._runner = _Kicks(scene, kicks)
-    return effects

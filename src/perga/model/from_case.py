@@ -1,4 +1,5 @@
-"""Case (the validated case file) -> SceneSpec (what the engine builds): the one mapping.
+"""Case (the validated case file) -> SceneSpec (the system a simulation is built from): the one
+mapping.
 
 Hammers take their outline and mass properties from :mod:`perga.case.hammer_geometry` (a plate's
 rectangle, or a geometry file), in the hammer frame (hinge at the origin, axis +x), spaced
@@ -27,6 +28,7 @@ from perga.model.spec import (
     FloorFrictionSpec,
     GranuleSpec,
     HammerSpec,
+    RigidContactSpec,
     RotorSpec,
     SceneSpec,
     SoftContactSpec,
@@ -89,10 +91,10 @@ def _effects(case: Case) -> EffectsSpec:
     )
 
 
-def _soft(case: Case) -> SoftContactSpec | None:
+def _contact_model(case: Case) -> RigidContactSpec | SoftContactSpec:
     cm = case.contact_model
-    if cm.kind == "rigid":
-        return None
+    if not cm.soft:
+        return RigidContactSpec()
     return SoftContactSpec(
         model=cm.kind,
         stiffness=normal_stiffness(case),
@@ -152,17 +154,19 @@ def scene_spec(case: Case) -> SceneSpec:
         if frozenset(c.pair) in pairs
     )
     gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
+    plan = step_plan(case)
     return SceneSpec(
         rotor=_rotor(case),
         hammers=hammers,
         granules=granules,
         contacts=contacts,
-        dt=step_plan(case).granule,
+        granule_dt=plan.granule,
         iterations=case.solver.iterations,
         gravity=gravity,
         granule_collisions=case.effects.granule_collisions is not None,
         chamber=_chamber(case),
         effects=_effects(case),
-        soft=_soft(case),
+        contact_model=_contact_model(case),
         drawing=_drawing(case),
+        plan=plan,
     )

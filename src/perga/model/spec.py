@@ -1,5 +1,5 @@
-"""Engine-level scene description: frozen dataclasses in SI units, independent of the case-file
-schema (``perga.case``), which is mapped onto these later.
+"""The system a simulation is built from: frozen dataclasses in SI units, independent of the
+case-file schema (``perga.case``), which :mod:`perga.model.from_case` maps onto them.
 
 Frames: the rotor axis is the origin of the fixed plane frame, ω > 0 turns counter-clockwise.
 A hammer's outline is given in its own frame: hinge at the origin, hammer axis along +x. The
@@ -15,11 +15,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
+
+import numpy as np
 
 from perga.analytic.common import STANDARD_GRAVITY
 from perga.geometry.convex import decompose
 from perga.geometry.polygon import clean, counter_clockwise, self_intersection, vertex_tuples
+from perga.geometry.wall import circumscribed, wall_pieces
+
+if TYPE_CHECKING:
+    from perga.case.timestep import StepPlan
 
 Vec2 = tuple[float, float]
 Mount = Literal["hinged", "welded", "free"]
@@ -252,6 +258,25 @@ class ChamberSpec:
             problems.append("material must be a non-empty name")
         _raise("chamber", problems)
 
+    @property
+    def outer_radius(self) -> float:
+        """The farthest point of the wall's inner outline from the axis, m."""
+        if self.outline is None:
+            return self.radius
+        return float(np.hypot(*np.array(self.outline).T).max())
+
+    def inner_outline(self) -> np.ndarray:
+        """The wall's inner outline, m: the chamber's outline, or the circumscribed polygon of
+        a round wall's circle (``segments`` sides)."""
+        if self.outline is not None:
+            return np.array(self.outline, dtype=float)
+        return circumscribed(self.radius, self.segments)
+
+    def pieces(self) -> tuple[list[np.ndarray], np.ndarray]:
+        """The wall's convex pieces and its outer outline, m
+        (:func:`perga.geometry.wall.wall_pieces`)."""
+        return wall_pieces(self.inner_outline(), self.wall_thickness)
+
 
 @dataclass(frozen=True)
 class FloorFrictionSpec:
@@ -333,6 +358,15 @@ class EffectsSpec:
 
 
 @dataclass(frozen=True)
+class RigidContactSpec:
+    """Rigid granule contacts: Pymunk's impulses, restitution and friction exact per impact
+    (:mod:`perga.contact.rigid`); the granules move with the machine's step (one substep)."""
+
+    kind: ClassVar[str] = "rigid"
+    substeps: ClassVar[int] = 1
+
+
+@dataclass(frozen=True)
 class SoftContactSpec:
     """Soft granule contacts (:mod:`perga.contact.soft`) instead of Pymunk impulses.
 
@@ -365,12 +399,17 @@ class SoftContactSpec:
             problems.append(f"substeps must be an integer >= 1 (got {self.substeps!r})")
         _raise("soft contacts", problems)
 
+    @property
+    def kind(self) -> str:
+        """The contact model's name in :data:`perga.contact.MODELS`: the law."""
+        return self.model
+
 
 @dataclass(frozen=True)
 class DrawingSpec:
     """Out-of-plane sizes of the parts for the 3-D view of the output (:mod:`perga.output.
-    vtk3d`), m; never used by the engine. Carried by the scene spec because the recorders see
-    the simulation only: a ``SceneSpec`` with a drawing is what asks for the 3-D view.
+    vtk3d`), m; never used by the engine. Carried by the system because the recorders see the
+    system and its frames only: a ``SceneSpec`` with a drawing is what asks for the 3-D view.
 
     hammer_thickness: one per hammer; rotor_thickness: the disc's; chamber_height: the wall's;
     granule_thickness: every granule's (drawn as cylinders).
@@ -393,37 +432,40 @@ class DrawingSpec:
 
 @dataclass(frozen=True)
 class SceneSpec:
-    """Everything the engine builds a scene from.
+    """Everything a simulation is built from.
 
-    dt: time step, s (> 0): Pymunk's, or with ``soft`` the granules' (Pymunk then steps
-    dt·soft.substeps); iterations: Chipmunk solver iterations (>= 1); gravity: in-plane
-    gravity, m/s² (zero for a horizontal rotor); granule_collisions: whether granules collide
-    with each other; chamber: the round wall, or None; effects: optional physics; soft: soft
-    granule contacts (:class:`SoftContactSpec`), or None for Pymunk's impulses; drawing: sizes
-    for the 3-D view of the output (:class:`DrawingSpec`), or None for none. Every
-    material pair that can touch must be in ``contacts`` exactly once. Hammers never collide
-    with each other, with the rotor or with the chamber wall.
+    granule_dt: the granules' time step, s (> 0); the machine (rotor and hammers in Pymunk)
+    steps ``machine_dt`` = granule_dt · contact_model.substeps; iterations: Chipmunk solver
+    iterations (>= 1); gravity: in-plane gravity, m/s² (zero for a horizontal rotor);
+    granule_collisions: whether granules collide with each other; chamber: the wall, or None;
+    effects: optional physics; contact_model: :class:`RigidContactSpec` (Pymunk's impulses) or
+    :class:`SoftContactSpec`; drawing: sizes for the 3-D view of the output
+    (:class:`DrawingSpec`), or None for none; plan: the time-step plan the steps came from
+    (:class:`perga.case.timestep.StepPlan`), None for a spec made by hand. Every material pair
+    that can touch must be in ``contacts`` exactly once. Hammers never collide with each other,
+    with the rotor or with the chamber wall.
     """
 
     rotor: RotorSpec
     hammers: tuple[HammerSpec, ...]
     granules: tuple[GranuleSpec, ...]
     contacts: tuple[ContactSpec, ...]
-    dt: float
+    granule_dt: float
     iterations: int = 10
     gravity: Vec2 = (0.0, 0.0)
     granule_collisions: bool = False
     chamber: ChamberSpec | None = None
     effects: EffectsSpec = EffectsSpec()
-    soft: SoftContactSpec | None = None
+    contact_model: RigidContactSpec | SoftContactSpec = RigidContactSpec()
     drawing: DrawingSpec | None = None
+    plan: StepPlan | None = None
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name in ("hammers", "granules", "contacts"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         problems: list[str] = []
-        _positive(problems, "dt", self.dt, "s")
+        _positive(problems, "granule_dt", self.granule_dt, "s")
         if not (isinstance(self.iterations, int) and self.iterations >= 1):
             problems.append(f"iterations must be an integer >= 1 (got {self.iterations!r})")
         _finite_vec(problems, "gravity", self.gravity)
@@ -460,8 +502,8 @@ class SceneSpec:
 
     @property
     def machine_dt(self) -> float:
-        """Pymunk's step of rotor and hammers, s: dt, or dt·soft.substeps with soft contacts."""
-        return self.dt * (self.soft.substeps if self.soft else 1)
+        """The machine's step (Pymunk's, of rotor and hammers), s: granule_dt · substeps."""
+        return self.granule_dt * self.contact_model.substeps
 
     def contact(self, material_a: str, material_b: str) -> ContactSpec:
         """The contact parameters of a material pair (order does not matter)."""

@@ -1,29 +1,36 @@
-"""Recorders triggered by simulated time, phase-locked: frame k is taken at the first step whose
-end time reaches k·every (never "every since the last"), so a run's frames do not drift.
+"""Recorders: what a run keeps, from frames (:class:`~perga.model.frame.Frame`), triggered by
+simulated time, phase-locked: frame k is taken at the first step whose end time reaches
+k·every (never "every since the last"), so a run's frames do not drift.
 
-Each recorder owns one table; ``record(sim)`` appends a frame. Impacts are written as they occur.
+Each recorder is built with the run directory and the system (:class:`~perga.model.spec.
+SceneSpec`); ``record(frame, impacts)`` appends a frame, ``impacts`` being every impact the run
+has recorded so far (the run's impact table). A table recorder owns one CSV table.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import fields
 from pathlib import Path
 from typing import Protocol
 
 import numpy as np
 
-from perga.engine.simulation import Impact, Simulation
+from perga.model.frame import Frame
+from perga.model.records import Impact
+from perga.model.spec import SceneSpec
 from perga.output.tables import Table
 from perga.output.vtk import VtkRecorder
 
 
 class Recorder(Protocol):
-    """What the runner needs of a recorder: ``record(sim)`` at each frame and ``close()`` at
-    the end of the run, whatever ended it."""
+    """What the runner needs of a recorder: built as ``Recorder(directory, spec)``,
+    ``record(frame, impacts)`` at each frame and ``close()`` at the end of the run, whatever
+    ended it."""
 
-    def record(self, sim: Simulation) -> None:
-        """Append what this recorder keeps at the simulation's current time."""
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+        """Append what this recorder keeps of ``frame`` and of ``impacts`` (all so far)."""
 
     def close(self) -> None:
         """Finish the recorder's files (idempotent)."""
@@ -62,18 +69,15 @@ class GranuleRecorder(TableRecorder):
 
     columns = ("time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed")
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "granules.csv", self.columns)
 
-    def record(self, sim: Simulation) -> None:
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
         """Append one frame."""
-        p, v, w = (
-            sim.granule_positions(),
-            sim.granule_velocities(),
-            sim.granule_angular_velocities(),
-        )
+        g = frame.granules
+        p, v, w = g.positions, g.velocities, g.angular_velocities
         speed = np.hypot(v[:, 0], v[:, 1])
-        t = sim.time
+        t = frame.time
         self.table.write(
             (t, i, p[i, 0], p[i, 1], v[i, 0], v[i, 1], w[i], speed[i]) for i in range(len(p))
         )
@@ -85,15 +89,14 @@ class HammerRecorder(TableRecorder):
 
     columns = ("time", "id", "swing_angle", "angular_velocity", "vx", "vy")
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "hammers.csv", self.columns)
 
-    def record(self, sim: Simulation) -> None:
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
         """Append one frame."""
-        t = sim.time
-        alpha, v = sim.hammer_swing_angles(), sim.hammer_velocities()
-        spin = sim.hammer_angular_velocities()
-        rows = [(t, -1, sim.rotor_angle(), sim.rotor_angular_velocity(), 0.0, 0.0)]
+        t, m = frame.time, frame.machine
+        alpha, v, spin = m.swing_angles, m.velocities, m.angular_velocities
+        rows = [(t, -1, m.rotor_angle, m.rotor_angular_velocity, 0.0, 0.0)]
         rows += [(t, i, alpha[i], spin[i], v[i, 0], v[i, 1]) for i in range(len(alpha))]
         self.table.write(rows)
 
@@ -115,18 +118,18 @@ def _impact_row(impact: Impact) -> tuple[object, ...]:
 
 
 class ImpactRecorder(TableRecorder):
-    """impacts.csv: every granule-hammer impact as it happens, one column per field of
-    :class:`~perga.engine.simulation.Impact` (SI)."""
+    """impacts.csv: every granule-hammer impact, one column per field of
+    :class:`~perga.model.records.Impact` (SI)."""
 
     columns = _impact_columns()
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "impacts.csv", self.columns)
         self.written = 0
 
-    def record(self, sim: Simulation) -> None:
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
         """Append the impacts recorded since the last call."""
-        new = sim.impacts[self.written :]
+        new = impacts[self.written :]
         self.table.write(_impact_row(i) for i in new)
         self.written += len(new)
 
@@ -144,28 +147,21 @@ class EnergyRecorder(TableRecorder):
         "closure",
     )
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "energy.csv", self.columns)
 
-    def record(self, sim: Simulation) -> None:
-        """Append one frame."""
-        e = sim.energy()
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+        """Append one frame (its ledger: the run must track energy)."""
+        e = frame.energy
+        if e is None:
+            raise ValueError("energy.csv needs frames with the energy ledger (track_energy)")
         self.table.write(
-            [
-                (
-                    sim.time,
-                    e.kinetic,
-                    e.drive_work,
-                    e.contact_dissipation,
-                    e.friction,
-                    e.drag,
-                    e.closure,
-                )
-            ]
-        )
+            [(frame.time, e.kinetic, e.drive_work, e.contact_dissipation, e.friction, e.drag,
+              e.closure)]
+        )  # fmt: skip
 
 
-RECORDERS: dict[str, type[Recorder]] = {
+RECORDERS: dict[str, type] = {
     "granules": GranuleRecorder,
     "hammers": HammerRecorder,
     "impacts": ImpactRecorder,

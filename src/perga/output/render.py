@@ -1,6 +1,6 @@
 """``perga render``: a preview image of a run from its tables, without ParaView or OpenGL.
 
-Reads the run directory's ``case.toml`` (geometry), ``granules.csv`` and ``hammers.csv``, and
+Reads the run directory's ``scene.json`` (geometry), ``granules.csv`` and ``hammers.csv``, and
 draws with matplotlib (a bare Figure, Agg): the chamber wall, the rotor disc, every hinged or
 welded hammer posed from its recorded swing angle and the rotor angle, and the granules as discs
 of their true radius coloured by speed, at the recorded frame nearest to ``time`` (default: the
@@ -12,7 +12,6 @@ tables do not pose, are not drawn.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -21,10 +20,8 @@ from matplotlib.collections import LineCollection, PatchCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
-from perga.case import load_case
 from perga.geometry.polygon import outline_or_circle
-from perga.model.from_case import scene_spec
-from perga.model.spec import HammerSpec
+from perga.output.scene_file import HammerGeometry, read_scene
 
 
 def _table(path: Path) -> np.ndarray:
@@ -35,22 +32,14 @@ def _table(path: Path) -> np.ndarray:
     return np.atleast_1d(data)
 
 
-def _case_folder(run: Path) -> Path | None:
-    """The folder of the case file the run came from (its geometry paths start there)."""
-    summary = run / "summary.json"
-    if not summary.exists():
-        return None
-    return Path(json.loads(summary.read_text())["case"]).parent
-
-
-def _hammer_outline(h: HammerSpec, rotor_angle: float, alpha: float) -> np.ndarray:
+def _hammer_outline(h: HammerGeometry, rotor_angle: float, alpha: float) -> np.ndarray:
     """World vertices (m) of a hinged or welded hammer at rotor angle and swing angle α."""
-    hinge = np.array(h.hinge_position)
+    hinge = np.array(h.hinge)
     c, s = math.cos(rotor_angle), math.sin(rotor_angle)
     hinge = np.array([c * hinge[0] - s * hinge[1], s * hinge[0] + c * hinge[1]])
     a = rotor_angle + h.angle_on_rotor + alpha
     rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
-    return hinge + np.array(h.outline) @ rot.T
+    return hinge + h.outline @ rot.T
 
 
 def render(
@@ -63,32 +52,35 @@ def render(
 ) -> float:
     """Draw run directory ``run`` into the PNG ``out`` (with a colour bar unless ``colorbar`` is
     False); returns the time of the frame drawn, s."""
-    spec = scene_spec(load_case(run / "case.toml", _case_folder(run)))
+    scene = read_scene(run)
     granules = _table(run / "granules.csv")
     hammers = _table(run / "hammers.csv")
     times = np.unique(granules["time"])
     t = times[-1] if time is None else times[np.argmin(np.abs(times - time))]
     fig = Figure(figsize=(7, 7), dpi=120)  # no pyplot: no GUI backend, no global state
     ax = fig.subplots()
-    r, c = spec.rotor, spec.chamber
-    wall = outline_or_circle(c.outline, c.radius, 256) if c else None
-    chamber = float(np.abs(wall).max()) if wall is not None else 1.2 * r.radius
+    wall = (
+        outline_or_circle(scene.chamber_outline, scene.chamber_radius, 256)
+        if scene.chamber_radius is not None
+        else None
+    )
+    chamber = float(np.abs(wall).max()) if wall is not None else 1.2 * scene.rotor_radius
     if wall is not None:
         ax.add_patch(Polygon(wall, closed=True, fill=False, color="0.3", lw=1.5))
-    disc = outline_or_circle(r.outline, r.radius, 256)
+    disc = outline_or_circle(scene.rotor_outline, scene.rotor_radius, 256)
     ax.add_patch(Polygon(disc, closed=True, fill=False, color="0.75", lw=1, ls="--"))
     frame = hammers[hammers["time"] == t]
     rotor_angle = float(frame["swing_angle"][frame["id"] == -1][0])
     polys = []
-    for i, h in enumerate(spec.hammers):
+    for i, h in enumerate(scene.hammers):
         if h.mount != "free":
             alpha = float(frame["swing_angle"][frame["id"] == i][0])
             polys.append(Polygon(_hammer_outline(h, rotor_angle, alpha), closed=True))
     ax.add_collection(PatchCollection(polys, facecolor="0.55", edgecolor="0.2"))
-    radius = np.array([g.radius for g in spec.granules])
+    radius = scene.granule_radii
     if trajectories:
         lines, stamps = [], []
-        for i in range(len(spec.granules)):
+        for i in range(len(radius)):
             path = granules[granules["id"] == i]
             xy = np.column_stack([path["x"], path["y"]])
             lines += list(np.stack([xy[:-1], xy[1:]], axis=1))

@@ -31,7 +31,7 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   ``granule_energy_gain`` (J), ``dissipated`` (J), ``normal`` (3 components). With no impacts
   the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty arrays).
 
-With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the scene spec) also
+With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the system) also
 ``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
 frames: see :mod:`perga.output.vtk3d`.
 
@@ -44,22 +44,21 @@ from __future__ import annotations
 import itertools
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
 from typing import BinaryIO
 
 import numpy as np
-import pymunk
 import pyvista as pv
 from numpy.typing import NDArray
 
-from perga.contact.soft.model import SoftSimulation
-from perga.contact.soft.polygon_set import HIST_ACTIVE
-from perga.engine import units as u
-from perga.engine.simulation import FloatArray, Simulation
-from perga.geometry.disc_polygon import closest_feature
 from perga.geometry.polygon import outline_or_circle
-from perga.model.spec import RotorSpec
+from perga.model.frame import Frame, MachineFrame
+from perga.model.records import Impact
+from perga.model.spec import RotorSpec, SceneSpec
 from perga.output import vtk3d
+
+FloatArray = NDArray[np.float64]
 
 ROTOR_SIDES = 64
 """Sides of the polygon drawn for the rotor disc."""
@@ -128,36 +127,15 @@ def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
     )
 
 
-def soft_contacts(sim: SoftSimulation) -> tuple[NDArray[np.int32], FloatArray]:
-    """Per granule: the number of contacts now (granule pairs and walls with overlap > 0,
-    hammers whose contact the kernel holds active) and the largest of their overlaps, m."""
-    g = sim.granules
-    n = g.n
-    i, j, delta, _ = g._pairs()
-    count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
-    overlap = np.zeros(n)
-    np.maximum.at(overlap, i, delta)
-    np.maximum.at(overlap, j, delta)
-    walls = g._walls_overlap()
-    count += np.count_nonzero(walls > 0.0, axis=1)
-    if walls.size:
-        np.maximum(overlap, walls.max(axis=1), out=overlap)
-    active = g.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-    count += np.count_nonzero(active, axis=1)
-    polys = g._poly[0].outline()
-    for a, k in np.argwhere(active):
-        d, _, _ = closest_feature(g.x[a, 0], g.x[a, 1], *polys, k)
-        overlap[a] = max(overlap[a], g.r[a] - d)
-    return count.astype(np.int32), overlap
-
-
 class VtkRecorder:
-    """Writes the files listed in the module doc into ``directory / "vtk"``: ``record(sim)``
-    a frame at ``sim.time``, ``close()`` the trajectories and impacts (idempotent)."""
+    """Writes the files listed in the module doc into ``directory / "vtk"`` for the system
+    ``spec``: ``record(frame, impacts)`` a frame (``impacts``: every impact so far), ``close()``
+    the trajectories and impacts (idempotent)."""
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.directory = directory / "vtk"
         self.directory.mkdir(parents=True, exist_ok=True)
+        self.spec = spec
         self.granules = PvdSeries(self.directory, "granules")
         self.machine = PvdSeries(self.directory, "machine")
         self.machine3d: PvdSeries | None = None
@@ -165,25 +143,19 @@ class VtkRecorder:
         self.frames = 0
         self.scratch = self.directory / ".trajectories.f8"
         self._scratch: BinaryIO | None = None
-        self._sim: Simulation | None = None
-        self._radius = self._mass = self._moment = np.empty(0)
-        self._material = np.empty(0, dtype=np.int32)
-        self._impact_count = np.empty(0, dtype=np.int64)
-        self._impacts_counted = 0
-        self._closed = False
-
-    def _start(self, sim: Simulation) -> None:
-        """Constant per-granule arrays, material names and the chamber, at the first frame."""
-        spec = sim.scene.spec
-        names = sorted({g.material for g in spec.granules})
-        self._radius = np.array([g.radius for g in spec.granules], dtype=float)
-        self._mass = np.array([g.mass for g in spec.granules], dtype=float)
-        self._moment = np.array([g.moment if g.rolls else 0.0 for g in spec.granules])
-        self._material = np.array([names.index(g.material) for g in spec.granules], dtype=np.int32)
+        self._impacts: list[Impact] = []
         self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)
+        self._outlines = [np.array(h.outline, dtype=float) for h in spec.hammers]
+        self._outlines.append(_disc(spec.rotor))
+        self._closed = False
+        self._started = False
+
+    def _start(self, frame: Frame) -> None:
+        """Material names and the chamber, at the first frame."""
+        spec = self.spec
         self._scratch = open(self.scratch, "wb")  # noqa: SIM115 (closed by close())
         self.granules.comment = "material: " + ", ".join(
-            f"{k} = {name}" for k, name in enumerate(names)
+            f"{k} = {name}" for k, name in enumerate(frame.granules.material_names)
         )
         if spec.chamber is not None:
             c = spec.chamber
@@ -192,19 +164,16 @@ class VtkRecorder:
             chamber = _grid([ring], pv.CellType.POLY_LINE, wall)
             chamber.save(self.directory / "chamber.vtu", binary=True, compression="zlib")
         if spec.drawing is not None:
-            self._start_3d(sim)
+            self._start_3d()
+        self._started = True
 
-    def _start_3d(self, sim: Simulation) -> None:
+    def _start_3d(self) -> None:
         """The extruded parts, the ``machine3d`` series and ``chamber3d.vtu``."""
-        scene, spec = sim.scene, sim.scene.spec
+        spec = self.spec
         drawing = spec.drawing
         assert drawing is not None
-        outlines = [np.asarray(o, dtype=float) * u.LENGTH for o in scene.hammer_outlines]
-        outlines.append(_disc(spec.rotor))
         self._machine3d = vtk3d.Machine3D(
-            [*scene.hammer_bodies, scene.rotor],
-            outlines,
-            [*drawing.hammer_thickness, drawing.rotor_thickness],
+            self._outlines, [*drawing.hammer_thickness, drawing.rotor_thickness]
         )
         self.machine3d = PvdSeries(self.directory, "machine3d")
         if spec.chamber is not None:
@@ -214,43 +183,39 @@ class VtkRecorder:
             chamber = vtk3d.part_grid(part)
             chamber.save(self.directory / "chamber3d.vtu", binary=True, compression="zlib")
 
-    def record(self, sim: Simulation) -> None:
-        """Write the granule and machine frames at ``sim.time`` and update both ``.pvd``."""
-        if self._sim is None:
-            self._start(sim)
-        self._sim = sim
-        t = sim.time
-        p, v, w = (
-            sim.granule_positions(),
-            sim.granule_velocities(),
-            sim.granule_angular_velocities(),
-        )
+    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+        """Write the granule and machine frames of ``frame`` and update both ``.pvd``."""
+        if not self._started:
+            self._start(frame)
+        g, t = frame.granules, frame.time
+        p, v, w = g.positions, g.velocities, g.angular_velocities
         speed = np.hypot(v[:, 0], v[:, 1])
-        new = sim.impacts[self._impacts_counted :]
+        new = impacts[len(self._impacts) :]
+        self._impacts += new
         for impact in new:
             self._impact_count[impact.granule] += 1
-        self._impacts_counted += len(new)
 
         mesh = _vertices(len(p), p)
         data = mesh.point_data
-        data["radius"] = self._radius
+        data["radius"] = g.radii
         data["velocity"] = _lift(v)
         data["speed"] = speed
         data["angular_velocity"] = w
-        data["kinetic_energy"] = 0.5 * self._mass * speed**2 + 0.5 * self._moment * w**2
-        data["id"] = np.arange(len(p), dtype=np.int64)
-        data["material"] = self._material
+        data["kinetic_energy"] = 0.5 * g.masses * speed**2 + 0.5 * g.inertia * w**2
+        data["id"] = g.ids
+        data["material"] = g.materials
         data["impacts"] = self._impact_count
-        if isinstance(sim, SoftSimulation):
-            data["contacts"], data["overlap_max"] = soft_contacts(sim)
-        drawing = sim.scene.spec.drawing
+        if g.contacts is not None and g.overlap_max is not None:
+            data["contacts"], data["overlap_max"] = g.contacts, g.overlap_max
+        drawing = self.spec.drawing
         if drawing is not None:
             data["thickness"] = np.full(len(p), drawing.granule_thickness)
         self.granules.add(t, mesh)
-        cell_data = machine_cell_data(sim)
-        self.machine.add(t, machine_mesh(sim, cell_data))
+        cell_data = machine_cell_data(self.spec, frame.machine)
+        origins, angles = _poses(frame.machine)
+        self.machine.add(t, machine_mesh(self._outlines, origins, angles, cell_data))
         if self.machine3d is not None and self._machine3d is not None:
-            self.machine3d.add(t, self._machine3d.mesh(cell_data))
+            self.machine3d.add(t, self._machine3d.mesh(origins, angles, cell_data))
         row = np.empty((len(p), 3))
         row[:, :2], row[:, 2] = p, speed
         assert self._scratch is not None
@@ -261,20 +226,20 @@ class VtkRecorder:
 
     def close(self) -> None:
         """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded)."""
-        if self._closed or self._sim is None:
+        if self._closed or not self._started:
             return
         self._closed = True
         try:
             self._write_trajectories()
         finally:
             self.scratch.unlink(missing_ok=True)
-        self._write_impacts(self._sim)
+        self._write_impacts()
 
     def _write_trajectories(self) -> None:
         """``trajectories.vtu`` from the scratch file (frame-major) read in blocks of frames."""
         assert self._scratch is not None
         self._scratch.close()
-        frames, n = self.frames, len(self._radius)
+        frames, n = self.frames, len(self.spec.granules)
         scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=(frames, 1 + 3 * n))
         points = np.zeros((n, frames, 3))  # granule-major
         speed = np.empty((n, frames))
@@ -301,9 +266,9 @@ class VtkRecorder:
         trajectories.cell_data["id"] = np.arange(n, dtype=np.int64)
         trajectories.save(self.directory / "trajectories.vtu", binary=True, compression="zlib")
 
-    def _write_impacts(self, sim: Simulation) -> None:
+    def _write_impacts(self) -> None:
         """``impacts.vtu``: every granule-hammer impact of the run."""
-        impacts = sim.impacts
+        impacts = self._impacts
         points = np.array([i.point for i in impacts], dtype=float).reshape(-1, 2)
         mesh = _vertices(len(impacts), points)
         columns: dict[str, np.ndarray] = {
@@ -324,44 +289,42 @@ def _disc(rotor: RotorSpec) -> FloatArray:
     return outline_or_circle(rotor.outline, rotor.radius, ROTOR_SIDES)
 
 
-def machine_cell_data(sim: Simulation) -> dict[str, NDArray]:
-    """Per part now, the hammers then the rotor: the cell data listed in the module doc."""
-    scene = sim.scene
-    hinges = {j.b: j for j in scene.joints if isinstance(j, pymunk.PivotJoint)}
-    force = [
-        0.0 if (joint := hinges.get(body)) is None else joint.impulse * u.IMPULSE / sim.dt
-        for body in scene.hammer_bodies
-    ]
-    alpha = sim.hammer_swing_angles()
-    mounts = np.array([h.angle_on_rotor for h in scene.spec.hammers], dtype=float)
-    theta = sim.rotor_angle()
+def _poses(machine: MachineFrame) -> tuple[FloatArray, FloatArray]:
+    """Where each part's frame is (m) and how it is turned (rad): the hammers, then the rotor."""
+    origins = np.vstack((machine.hinges, np.zeros((1, 2))))
+    return origins, np.append(machine.axis_angles, machine.rotor_angle)
+
+
+def machine_cell_data(spec: SceneSpec, machine: MachineFrame) -> dict[str, NDArray]:
+    """Per part, the hammers then the rotor: the cell data listed in the module doc."""
+    alpha = np.asarray(machine.swing_angles)
+    mounts = np.array([h.angle_on_rotor for h in spec.hammers], dtype=float)
+    theta = machine.rotor_angle
     return {
         "id": np.append(np.arange(len(alpha), dtype=np.int64), -1),
         "swing_angle": np.append(alpha, 0.0),
         "angle": np.append(theta + mounts + alpha, theta),
-        "angular_velocity": np.append(
-            sim.hammer_angular_velocities(), sim.rotor_angular_velocity()
-        ),
-        "hinge_force": np.append(force, 0.0),
+        "angular_velocity": np.append(machine.angular_velocities, machine.rotor_angular_velocity),
+        "hinge_force": np.append(machine.hinge_forces, 0.0),
     }
 
 
 def machine_mesh(
-    sim: Simulation, cell_data: dict[str, NDArray] | None = None
+    outlines: Sequence[FloatArray],
+    origins: FloatArray,
+    angles: FloatArray,
+    cell_data: dict[str, NDArray],
 ) -> pv.UnstructuredGrid:
-    """The hammers posed now, then the rotor disc, as polygons with the cell data listed in the
-    module doc (``cell_data``: :func:`machine_cell_data`, computed if not given)."""
-    scene = sim.scene
-    outlines: list[FloatArray] = [
-        np.array([tuple(body.local_to_world(v)) for v in outline]) * u.LENGTH
-        for body, outline in zip(scene.hammer_bodies, scene.hammer_outlines, strict=True)
-    ]
-    rotor = scene.rotor
-    disc = _disc(scene.spec.rotor) / u.LENGTH
-    outlines.append(np.array([tuple(rotor.local_to_world(tuple(v))) for v in disc]) * u.LENGTH)
-    ends = np.cumsum([0] + [len(o) for o in outlines])
+    """The parts (``outlines`` in their own frames, m) posed at ``origins`` (m) and ``angles``
+    (rad), as polygons with ``cell_data``."""
+    posed = []
+    for outline, origin, angle in zip(outlines, origins, angles, strict=True):
+        c, s = np.cos(angle), np.sin(angle)
+        x, y = outline[:, 0], outline[:, 1]
+        posed.append(np.column_stack((origin[0] + c * x - s * y, origin[1] + s * x + c * y)))
+    ends = np.cumsum([0] + [len(o) for o in posed])
     cells = [np.arange(a, b, dtype=np.int64) for a, b in itertools.pairwise(ends)]
-    mesh = _grid(cells, pv.CellType.POLYGON, np.concatenate(outlines))
-    for name, values in (cell_data or machine_cell_data(sim)).items():
+    mesh = _grid(cells, pv.CellType.POLYGON, np.concatenate(posed))
+    for name, values in cell_data.items():
         mesh.cell_data[name] = values
     return mesh

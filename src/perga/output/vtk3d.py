@@ -1,7 +1,7 @@
 """The 3-D view of a run (case option ``output.vtk_3d``): the machine as closed triangle meshes,
 so that a ParaView scene looks like the machine. Written by :class:`perga.output.vtk.VtkRecorder`
-when the scene spec carries a :class:`~perga.model.spec.DrawingSpec` (the parts' thicknesses;
-the recorders see the simulation only, so the case's sizes travel in its spec).
+when the system carries a :class:`~perga.model.spec.DrawingSpec` (the parts' thicknesses;
+the recorders see the system and its frames only, so the case's sizes travel in the system).
 
 Files in ``RUN/vtk/`` (SI units), beside the 2-D ones of :mod:`perga.output.vtk`:
 
@@ -30,12 +30,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pymunk
 import pyvista as pv
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
-from perga.engine import units as u
 from perga.geometry.extrude import extrude
 from perga.geometry.polygon import FloatArray, clean, counter_clockwise, signed_area
 from perga.geometry.wall import wall_pieces
@@ -65,20 +63,11 @@ def _triangles(vertices: FloatArray, triangles: NDArray[np.int64]) -> pv.Unstruc
 
 
 class Machine3D:
-    """The hammers and the rotor disc extruded once; :meth:`mesh` poses them like their bodies.
+    """The hammers and the rotor disc extruded once (``outlines`` in their own frames, m;
+    ``thicknesses``, m); :meth:`mesh` poses them."""
 
-    bodies: the Pymunk bodies, in the order of ``outlines`` (m, in each body's frame) and
-    ``thicknesses`` (m).
-    """
-
-    def __init__(
-        self,
-        bodies: Sequence[pymunk.Body],
-        outlines: Sequence[ArrayLike],
-        thicknesses: Sequence[float],
-    ) -> None:
+    def __init__(self, outlines: Sequence[ArrayLike], thicknesses: Sequence[float]) -> None:
         parts = [extruded(o, t) for o, t in zip(outlines, thicknesses, strict=True)]
-        self.bodies = list(bodies)
         sizes = [len(p.vertices) for p in parts]
         self.local = np.concatenate([p.vertices for p in parts])
         starts = np.cumsum([0, *sizes[:-1]])
@@ -88,10 +77,13 @@ class Machine3D:
         self.vertex_part = np.repeat(np.arange(len(parts)), sizes)
         self.triangle_counts = np.array([len(p.triangles) for p in parts])
 
-    def mesh(self, cell_data: dict[str, NDArray]) -> pv.UnstructuredGrid:
-        """The parts posed now; ``cell_data`` holds one value per part (hammers, then rotor)."""
-        angle = np.array([b.angle for b in self.bodies])[self.vertex_part]
-        origin = np.array([tuple(b.local_to_world((0.0, 0.0))) for b in self.bodies]) * u.LENGTH
+    def mesh(
+        self, origins: FloatArray, angles: FloatArray, cell_data: dict[str, NDArray]
+    ) -> pv.UnstructuredGrid:
+        """The parts with their frames at ``origins`` (m) turned by ``angles`` (rad);
+        ``cell_data`` holds one value per part (hammers, then rotor)."""
+        angle = np.asarray(angles)[self.vertex_part]
+        origin = np.asarray(origins)
         c, s = np.cos(angle), np.sin(angle)
         x, y = self.local[:, 0], self.local[:, 1]
         points = np.column_stack(

@@ -2,8 +2,8 @@
 
 For each scene of :mod:`perga.studies.accuracy_scenes` and each :class:`Setting` of the grid
 (rigid: time step × solver iterations; linear and Hertz soft contacts: steps per contact ×
-granule substeps) one run through the case path (``Case`` -> ``scene_spec`` -> ``Simulation`` or
-``SoftSimulation``, impact log and energy meter on, as ``perga run`` records them) gives:
+granule substeps) one run through the case path (``Case`` -> ``scene_spec`` -> ``Simulation``,
+impact log and energy meter on, as ``perga run`` records them) gives:
 
 * the error against the scene's reference (:data:`REFERENCES`), deterministic;
 * the wall time per simulated second: the time spent inside ``sim.step()`` (``perf_counter``
@@ -27,8 +27,6 @@ import numpy as np
 
 from perga.analytic.common import STANDARD_GRAVITY
 from perga.case import Case, CaseError
-from perga.contact.soft.model import SoftSimulation
-from perga.engine.machine import build_scene
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
 from perga.studies.accuracy_scenes import (
@@ -113,8 +111,7 @@ class Stepper:
 
 def simulation(case: Case) -> Simulation:
     """The rigid or soft simulation of a case, impact log and energy meter on."""
-    spec = scene_spec(case)
-    return SoftSimulation.from_spec(spec) if spec.soft else Simulation(build_scene(spec))
+    return Simulation(scene_spec(case))
 
 
 def _run_to(stepper: Stepper, duration: float) -> None:

@@ -15,22 +15,22 @@ import pymunk
 import pytest
 from tests.engine.helpers import plate
 
+from perga.contact.protocol import GranuleState
 from perga.contact.rigid import batch as state_module
-from perga.contact.rigid.batch import GranuleReader, GranuleState, GranuleWriter, granule_state
-from perga.engine import (
-    ContactSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    Scene,
-    SceneSpec,
-    Simulation,
-    build_scene,
-)
+from perga.contact.rigid.batch import GranuleReader, GranuleWriter
+from perga.contact.rigid.bodies import RigidBodies, attach_bodies
+from perga.engine import Simulation
 from perga.engine import units as u
+from perga.engine.machine import build_machine
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 
 OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s
 RADIUS = 1.5e-3  # m
+
+
+def _parts(bodies: RigidBodies) -> tuple:
+    """A reader's or writer's arguments: the space and its granule bodies."""
+    return bodies.space, bodies.granule_bodies
 
 
 def _spec(n_rings: int = 3) -> SceneSpec:
@@ -81,14 +81,14 @@ def _spec(n_rings: int = 3) -> SceneSpec:
             ContactSpec("bb", "steel", restitution=0.6, friction=0.4),
             ContactSpec("bb", "bb", restitution=0.5, friction=0.3),
         ),
-        dt=2e-5,
+        granule_dt=2e-5,
         granule_collisions=True,
     )
 
 
 def _loop(sim: Simulation) -> GranuleState:
     """Reference: every granule body's attributes read one by one."""
-    bodies = sim.scene.granule_bodies
+    bodies = sim.contacts.bodies.granule_bodies
     return GranuleState(
         positions=np.array([tuple(b.position) for b in bodies], dtype=float) * u.LENGTH,
         velocities=np.array([tuple(b.velocity) for b in bodies], dtype=float) * u.VELOCITY,
@@ -108,7 +108,7 @@ def _assert_same(got: GranuleState, expected: GranuleState) -> None:
 @pytest.fixture(scope="module")
 def stepped() -> Simulation:
     """The scene after 3 ms (hammers have hit granules, granules hit each other)."""
-    sim = Simulation(build_scene(_spec()))
+    sim = Simulation(_spec())
     sim.run(3e-3)
     return sim
 
@@ -116,7 +116,7 @@ def stepped() -> Simulation:
 def test_scene_is_a_real_test(stepped: Simulation) -> None:
     # the reads below mean something only if bodies of every kind are in the space and the
     # granules have been struck: kinematic rotor, dynamic hammers, many granules in motion
-    kinds = {b.body_type for b in stepped.scene.space.bodies}
+    kinds = {b.body_type for b in stepped.contacts.bodies.space.bodies}
     assert kinds == {pymunk.Body.KINEMATIC, pymunk.Body.DYNAMIC}
     assert len(stepped.impacts) > 5
     speeds = np.linalg.norm(_loop(stepped).velocities, axis=1)
@@ -124,18 +124,18 @@ def test_scene_is_a_real_test(stepped: Simulation) -> None:
 
 
 def test_matches_python_loop_exactly(stepped: Simulation) -> None:
-    reader = GranuleReader(stepped.scene)
+    reader = GranuleReader(*_parts(stepped.contacts.bodies))
     expected = _loop(stepped)
     _assert_same(reader.read(), expected)
     np.testing.assert_array_equal(reader.positions(), expected.positions)
     np.testing.assert_array_equal(reader.velocities(), expected.velocities)
     np.testing.assert_array_equal(reader.angular_velocities(), expected.angular_velocities)
-    _assert_same(granule_state(stepped.scene), expected)
+    _assert_same(GranuleReader(*_parts(stepped.contacts.bodies)).read(), expected)
 
 
 def test_matches_loop_while_stepping() -> None:
-    sim = Simulation(build_scene(_spec(n_rings=2)))
-    reader = GranuleReader(sim.scene)
+    sim = Simulation(_spec(n_rings=2))
+    reader = GranuleReader(*_parts(sim.contacts.bodies))
     for _ in range(5):
         sim.run(4e-4)
         _assert_same(reader.read(), _loop(sim))
@@ -143,7 +143,7 @@ def test_matches_loop_while_stepping() -> None:
 
 def test_rows_are_in_spec_order() -> None:
     spec = _spec(n_rings=2)
-    reader = GranuleReader(build_scene(spec))
+    reader = GranuleReader(*_parts(attach_bodies(build_machine(spec))))
     state = reader.read()
     assert reader.count == len(spec.granules) == state.positions.shape[0]
     for i, g in enumerate(spec.granules):
@@ -158,22 +158,22 @@ def test_rows_are_in_spec_order() -> None:
 
 
 def test_survives_reordering_of_chipmunks_body_array() -> None:
-    sim = Simulation(build_scene(_spec(n_rings=2)))
-    reader = GranuleReader(sim.scene)
+    sim = Simulation(_spec(n_rings=2))
+    reader = GranuleReader(*_parts(sim.contacts.bodies))
     sim.run(2e-4)
     _assert_same(reader.read(), _loop(sim))
     # removing a body moves Chipmunk's last body into its slot; Pymunk creates and adds
     # space.static_body on first access: both change the rows of the batch read
-    free = sim.scene.hammer_bodies[-1]
-    sim.scene.space.remove(free, *free.shapes)
-    assert sim.scene.space.static_body is not None
+    free = sim.machine.hammer_bodies[-1]
+    sim.machine.space.remove(free, *free.shapes)
+    assert sim.machine.space.static_body is not None
     sim.run(2e-4)
     _assert_same(reader.read(), _loop(sim))
 
 
 def test_granule_missing_from_space_is_an_error() -> None:
-    scene = build_scene(_spec(n_rings=1))
-    reader = GranuleReader(scene)
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
+    reader = GranuleReader(*_parts(scene))
     body = scene.granule_bodies[3]
     scene.space.remove(body, *body.shapes)
     with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
@@ -181,8 +181,8 @@ def test_granule_missing_from_space_is_an_error() -> None:
 
 
 def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    scene = build_scene(_spec(n_rings=1))
-    reader = GranuleReader(scene)
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
+    reader = GranuleReader(*_parts(scene))
     real = state_module.pb.get_space_bodies
 
     def short(space: pymunk.Space, fields: object, buffer: object) -> None:
@@ -200,9 +200,9 @@ def test_no_granules() -> None:
         hammers=(),
         granules=(),
         contacts=(),
-        dt=1e-5,
+        granule_dt=1e-5,
     )
-    state = GranuleReader(build_scene(spec)).read()
+    state = GranuleReader(*_parts(attach_bodies(build_machine(spec)))).read()
     assert state.positions.shape == (0, 2)
     assert state.velocities.shape == (0, 2)
     assert state.angular_velocities.shape == (0,)
@@ -211,21 +211,23 @@ def test_no_granules() -> None:
 # --- the writer ------------------------------------------------------------------------------
 
 
-def _everything(scene: Scene) -> list[tuple[float, ...]]:
+def _everything(scene: RigidBodies) -> list[tuple[float, ...]]:
     """Every body's (static body included) position, angle, velocity and angular velocity."""
     bodies = [*scene.space.bodies, scene.space.static_body]
     return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
 
 
-def _others(scene: Scene) -> list[tuple[float, ...]]:
+def _others(scene: RigidBodies) -> list[tuple[float, ...]]:
     granules = set(scene.granule_bodies)
     bodies = [b for b in scene.space.bodies if b not in granules] + [scene.space.static_body]
     return [(*b.position, b.angle, *b.velocity, b.angular_velocity) for b in bodies]
 
 
 def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
-    scene = stepped.scene
-    writer = GranuleWriter(scene)  # its construction check writes and undoes: nothing changes
+    scene = stepped.contacts.bodies
+    writer = GranuleWriter(
+        *_parts(scene)
+    )  # its construction check writes and undoes: nothing changes
     before, others = _loop(stepped), _others(scene)
     _assert_same(writer.read(), before)
     v, p = writer.read_internal(positions=True)
@@ -248,22 +250,24 @@ def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
 
 
 def test_writer_survives_reordering() -> None:
-    sim = Simulation(build_scene(_spec(n_rings=2)))
-    writer = GranuleWriter(sim.scene)
-    free = sim.scene.hammer_bodies[-1]
-    sim.scene.space.remove(free, *free.shapes)
-    assert sim.scene.space.static_body is not None
+    sim = Simulation(_spec(n_rings=2))
+    writer = GranuleWriter(*_parts(sim.contacts.bodies))
+    free = sim.machine.hammer_bodies[-1]
+    sim.machine.space.remove(free, *free.shapes)
+    assert sim.machine.space.static_body is not None
     sim.run(2e-4)
-    others = _others(sim.scene)
+    others = _others(sim.contacts.bodies)
     new = np.arange(2.0 * writer.count).reshape(-1, 2)
     writer.write_internal_velocities(new)
-    np.testing.assert_array_equal([tuple(b.velocity) for b in sim.scene.granule_bodies], new)
-    assert _others(sim.scene) == others
+    np.testing.assert_array_equal(
+        [tuple(b.velocity) for b in sim.contacts.bodies.granule_bodies], new
+    )
+    assert _others(sim.contacts.bodies) == others
 
 
 def test_writer_rejects_bad_velocities() -> None:
-    scene = build_scene(_spec(n_rings=1))
-    writer = GranuleWriter(scene)
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
+    writer = GranuleWriter(*_parts(scene))
     before = _everything(scene)
     v, _ = writer.read_internal(positions=False)
     with pytest.raises(ValueError, match="shape"):
@@ -277,8 +281,8 @@ def test_writer_rejects_bad_velocities() -> None:
 
 
 def test_writer_granule_missing_from_space_is_an_error() -> None:
-    scene = build_scene(_spec(n_rings=1))
-    writer = GranuleWriter(scene)
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
+    writer = GranuleWriter(*_parts(scene))
     v, _ = writer.read_internal(positions=False)
     body = scene.granule_bodies[3]
     scene.space.remove(body, *body.shapes)
@@ -289,8 +293,8 @@ def test_writer_granule_missing_from_space_is_an_error() -> None:
 
 
 def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    scene = build_scene(_spec(n_rings=1))
-    writer = GranuleWriter(scene)
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
+    writer = GranuleWriter(*_parts(scene))
     v, _ = writer.read_internal(positions=False)
     real = state_module.pb.get_space_bodies
 
@@ -309,7 +313,7 @@ def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> Non
 def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: str) -> None:
     """A set_space_bodies that writes nothing, or writes every body's row one body later (as a
     changed layout would), fails the writer's construction check."""
-    scene = build_scene(_spec(n_rings=1))
+    scene = attach_bodies(build_machine(_spec(n_rings=1)))
     real = state_module.pb.set_space_bodies
 
     def faulty(space: pymunk.Space, fields: object, buffer: pymunk.batch.Buffer) -> None:
@@ -320,15 +324,19 @@ def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: 
 
     monkeypatch.setattr(state_module.pb, "set_space_bodies", faulty)
     with pytest.raises(RuntimeError, match="set_space_bodies check failed"):
-        GranuleWriter(scene)
+        GranuleWriter(*_parts(scene))
 
 
 def test_writer_no_granules() -> None:
     spec = SceneSpec(
-        rotor=RotorSpec(omega=10.0, radius=0.1), hammers=(), granules=(), contacts=(), dt=1e-5
+        rotor=RotorSpec(omega=10.0, radius=0.1),
+        hammers=(),
+        granules=(),
+        contacts=(),
+        granule_dt=1e-5,
     )
-    scene = build_scene(spec)
-    writer = GranuleWriter(scene)
+    scene = attach_bodies(build_machine(spec))
+    writer = GranuleWriter(*_parts(scene))
     v, p = writer.read_internal(positions=True)
     assert v.shape == (0, 2) and p is not None and p.shape == (0, 2)
     writer.write_internal_velocities(np.zeros((0, 2)))

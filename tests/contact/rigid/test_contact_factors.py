@@ -8,8 +8,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from tests.engine.helpers import plate
 
-from perga.engine import ContactSpec, GranuleSpec, RotorSpec, SceneSpec, Simulation, build_scene
-from perga.engine.machine import factor_pair_table
+from perga.contact.rigid.bodies import factor_pair_table
+from perga.engine import Simulation
+from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
 
 ULP4 = 4 * 2.2e-16  # the factorisation promises the pair value to 4 ulp (two roundings + slack)
 
@@ -74,9 +75,14 @@ def test_unsplit_pair_still_gets_its_exact_restitution():
         material="steel",
     )
     spec = SceneSpec(
-        RotorSpec(1e-6, 0.05), (hammer,), granules, contacts, dt=1e-5, granule_collisions=True
+        RotorSpec(1e-6, 0.05),
+        (hammer,),
+        granules,
+        contacts,
+        granule_dt=1e-5,
+        granule_collisions=True,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(0.01)
     _, unsplit = factor_pair_table({c.key: c.restitution for c in contacts})
     assert frozenset(("b",)) in unsplit  # this pair really goes through the setter

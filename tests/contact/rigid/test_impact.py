@@ -7,16 +7,8 @@ import pytest
 from tests.engine.helpers import plate, rectangle
 
 from perga.analytic.impact import hinged_impact, normal_impact
-from perga.engine import (
-    ContactSpec,
-    GranuleSpec,
-    HammerSpec,
-    RotorSpec,
-    SceneSpec,
-    Simulation,
-    build_scene,
-    units,
-)
+from perga.engine import Simulation, units
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 
 # A single rigid impact is one impulse solve: Chipmunk's restitution target is exact, so the
 # result is exact up to rounding (~1e-15, design §5). 1e-6 leaves room for iteration counts
@@ -44,9 +36,9 @@ def test_free_two_body_impact(m: float, M: float, e: float) -> None:
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("beebread", "steel", restitution=e, friction=0.3),),
-        dt=1e-6,
+        granule_dt=1e-6,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(2e-5)
     exact = normal_impact(m, M, 0.0, V, e)
     assert sim.granule_velocities()[0, 1] == pytest.approx(exact.granule_velocity, rel=RTOL_IMPULSE)
@@ -86,9 +78,9 @@ def test_restitution_is_the_pairs_not_the_product() -> None:
         hammers=(wall,),
         granules=granules,
         contacts=contacts,
-        dt=1e-5,
+        granule_dt=1e-5,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(1e-4)
     after = sim.granule_velocities()[:, 1]
     assert after[0] == pytest.approx(-0.55 * v, rel=1e-12)
@@ -119,11 +111,10 @@ def test_hinged_hammer_on_kinematic_rotor() -> None:
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=e, friction=0.0),),
-        dt=1e-5,
+        granule_dt=1e-5,
     )
-    scene = build_scene(spec)
-    sim = Simulation(scene)
-    body = scene.hammer_bodies[0]
+    sim = Simulation(spec)
+    body = sim.machine.hammer_bodies[0]
     while not sim.impacts:
         spin_before = body.angular_velocity / units.TIME  # rad/s
         sim.step()
@@ -170,9 +161,9 @@ def _corner_hit(outline) -> Simulation:
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=0.7, friction=0.0),),
-        dt=1e-5,
+        granule_dt=1e-5,
     )
-    sim = Simulation(build_scene(spec))
+    sim = Simulation(spec)
     sim.run(2e-4)
     return sim
 
@@ -187,7 +178,7 @@ def test_two_pieces_of_one_hammer_give_one_impact() -> None:
     ell = ((0.0, 0.0), (2 * side, 0.0), (2 * side, side), (side, side), (side, 2 * side),
            (0.0, 2 * side))  # fmt: skip
     whole, pieces = _corner_hit(square), _corner_hit(ell)
-    assert len(build_scene(pieces.scene.spec).hammer_shapes[0]) == 2
+    assert len(pieces.machine.hammer_shapes[0]) == 2
     (one,) = whole.impacts
     (merged,) = pieces.impacts
     assert merged.normal_impulse == pytest.approx(one.normal_impulse, rel=1e-9)

@@ -1,0 +1,1 @@
+"""Rigid contacts: Pymunk's impulses (:class:`~perga.contact.rigid.model.RigidContacts`)."""

@@ -1,9 +1,10 @@
 """Bulk, checked reads of the granules' state, and the one bulk write of their velocities, through
-``pymunk.batch`` (the one place it is used).
+``pymunk.batch`` (with the arbiter meter, :mod:`perga.contact.rigid.dissipation`, the places it
+is used).
 
-Reading ``body.position`` for every granule in a Python loop costs about a microsecond per
-attribute; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C
-pass, about 100× faster (design §5). The batch API is experimental, so it is wrapped here and
+Reading ``body.position`` for every granule in a Python loop costs an attribute access per
+body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
+(docs/performance.md has the gain). The batch API is experimental, so it is wrapped here and
 nowhere else, with these properties:
 
 * **It cannot select bodies.** ``get_space_bodies`` walks Chipmunk's body arrays: every
@@ -38,22 +39,20 @@ nowhere else, with these properties:
 Values are copies (the batch buffer is reused), converted to SI by one multiplication by the
 unit of :mod:`perga.engine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
 gives. Rows are in the spec's granule order. :class:`GranuleWriter` works in Chipmunk's
-internal units on both sides (its only client, :mod:`perga.engine.effects`, computes in them).
+internal units on both sides (its client, the effects' kicks, computes in them).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
 
 import numpy as np
+import pymunk
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
+from perga.contact.protocol import GranuleState
 from perga.engine import units as u
-
-if TYPE_CHECKING:  # scene.py imports effects.py, which imports this module
-    from perga.engine.machine import Scene
 
 FloatArray = NDArray[np.float64]
 _F = pb.BodyFields
@@ -79,30 +78,17 @@ def _columns(fields: pb.BodyFields) -> dict[pb.BodyFields, slice]:
     return out
 
 
-@dataclass(frozen=True)
-class GranuleState:
-    """One consistent read of all granules, SI, rows in spec order.
-
-    positions: centres, (n, 2), m; velocities: centre velocities, (n, 2), m/s;
-    angular_velocities: (n,), rad/s.
-    """
-
-    positions: FloatArray
-    velocities: FloatArray
-    angular_velocities: FloatArray
-
-
 class GranuleReader:
-    """Reads the granules of one :class:`~perga.engine.machine.Scene` through ``pymunk.batch``.
+    """Reads the granule bodies ``bodies`` of ``space`` through ``pymunk.batch``.
 
-    Build it once per scene (it records the granule bodies' ids and verifies the batch layout
+    Build it once per space (it records the granule bodies' ids and verifies the batch layout
     once) and call it as often as needed; each call is one C pass over the space's bodies plus
     a few numpy operations.
     """
 
-    def __init__(self, scene: Scene) -> None:
-        self._space = scene.space
-        self._bodies = list(scene.granule_bodies)
+    def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body]) -> None:
+        self._space = space
+        self._bodies = list(bodies)
         self._ids = np.array([b.id for b in self._bodies], dtype=np.uintp)
         if np.unique(self._ids).size != self._ids.size:
             raise ValueError("granule bodies are not distinct")
@@ -223,8 +209,8 @@ class GranuleWriter(GranuleReader):
     it is not meant for use inside ``space.step`` callbacks.
     """
 
-    def __init__(self, scene: Scene) -> None:
-        super().__init__(scene)
+    def __init__(self, space: pymunk.Space, bodies: Sequence[pymunk.Body]) -> None:
+        super().__init__(space, bodies)
         self._write_buffer = pb.Buffer()  # only ever filled by get_space_bodies
         if self._bodies:
             self._verify_write()
@@ -289,9 +275,3 @@ class GranuleWriter(GranuleReader):
             self.write_internal_velocities(original)
         if [tuple(self._bodies[i].velocity) for i in ends] != [tuple(original[i]) for i in ends]:
             raise RuntimeError("pymunk.batch.set_space_bodies check failed: undo did not restore")
-
-
-def granule_state(scene: Scene) -> GranuleState:
-    """One-off read of all granules (builds a :class:`GranuleReader`; keep a reader instead
-    when reading repeatedly)."""
-    return GranuleReader(scene).read()

@@ -3,14 +3,12 @@
 Chipmunk collides a granule with each convex piece on its own, so near a seam between two
 pieces it makes contacts that the hammer's outline does not have: with the seam itself (a
 "ghost" normal along the diagonal) and with a corner split between two pieces (blended
-normals). Measured on an L-shaped welded hammer struck at its split corner along the corner's
-bisector: the granule left 8° off the bisector, against straight back from the square with
-that corner. ``OutlineFilter`` gives every Chipmunk contact of such a hammer, in ``pre_solve``,
-the contact of the soft kernel's rule (:func:`perga.geometry.disc_polygon.closest_feature` over the
-piece's solid edges and owned corners): a piece whose feature is not the outline's, or that
-the granule does not overlap by the outline's rule, has no contact this step; the others get
-the outline's normal and depth. Scenes with convex hammers
-only install nothing.
+normals; docs/validation.md has what that does to a rebound). ``OutlineFilter`` gives every
+Chipmunk contact of such a hammer, in ``pre_solve``, the contact of the soft kernel's rule
+(:func:`perga.geometry.disc_polygon.closest_feature` over the piece's solid edges and owned
+corners): a piece whose feature is not the outline's, or that the granule does not overlap by
+the outline's rule, has no contact this step; the others get the outline's normal and depth.
+Scenes with convex hammers only install nothing.
 """
 
 from __future__ import annotations
@@ -22,19 +20,19 @@ import pymunk
 
 from perga.contact.soft.polygon_set import KINEMATIC, polygon_set
 from perga.engine import units as u
-from perga.engine.machine import Scene
+from perga.engine.machine import Machine
 from perga.geometry.disc_polygon import closest_feature
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
 
 class OutlineFilter:
-    """The pieces of the scene's multi-piece hammers in their bodies' frames (SI), with the
+    """The pieces of the machine's multi-piece hammers in their bodies' frames (SI), with the
     outline features of :func:`~perga.geometry.pieces.piece_features`."""
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, machine: Machine) -> None:
         self._piece: dict[pymunk.Shape, tuple[tuple[np.ndarray, ...], int]] = {}
-        for shapes, outline in zip(scene.hammer_shapes, scene.hammer_outlines, strict=True):
+        for shapes, outline in zip(machine.hammer_shapes, machine.hammer_outlines, strict=True):
             if len(shapes) < 2:
                 continue
             pieces = [counter_clockwise(np.array(s.get_vertices()) * u.LENGTH) for s in shapes]

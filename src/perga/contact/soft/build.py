@@ -18,7 +18,7 @@ import numpy as np
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, pair_table
 from perga.contact.soft.polygon_set import ContactTable, PolygonSet, contact_table
-from perga.model.spec import SceneSpec
+from perga.model.spec import SceneSpec, SoftContactSpec
 
 
 def _radius_of(spec: SceneSpec, material: str) -> float:
@@ -28,8 +28,8 @@ def _radius_of(spec: SceneSpec, material: str) -> float:
 
 
 def _stiffness(spec: SceneSpec, a: str, b: str) -> float:
-    soft = spec.soft
-    assert soft is not None
+    soft = spec.contact_model
+    assert isinstance(soft, SoftContactSpec)
     if soft.model == "linear":
         return soft.stiffness
     ra, rb = _radius_of(spec, a), _radius_of(spec, b)
@@ -41,8 +41,8 @@ def _stiffness(spec: SceneSpec, a: str, b: str) -> float:
 
 def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
     """The kernel's (n_mat, n_mat, N_PARAMS) table over ``materials`` (granules and wall)."""
-    soft = spec.soft
-    assert soft is not None
+    soft = spec.contact_model
+    assert isinstance(soft, SoftContactSpec)
     pairs = spec.touching_pairs()
     rows = {}
     for i, a in enumerate(materials):
@@ -70,8 +70,8 @@ def polygon_table(
     spec: SceneSpec, materials: list[str], polygon_materials: list[str]
 ) -> ContactTable:
     """The granule-polygon table: rows ``materials`` (granules' used), columns the polygons'."""
-    soft = spec.soft
-    assert soft is not None
+    soft = spec.contact_model
+    assert isinstance(soft, SoftContactSpec)
     shape = (len(materials), len(polygon_materials))
     e, f = np.ones(shape), np.zeros(shape)
     granule_materials = {g.material for g in spec.granules}
@@ -85,19 +85,18 @@ def polygon_table(
 
 
 THREADED_FROM = 4000
-"""Granule count from which the kernel uses all of numba's threads; below it one thread. Each
-step opens several parallel regions, each costing tens of µs on a busy machine: measured with
-2 threads under load, the 300-granule soft separator took 3.3-4.1 ms per Pymunk step against
-0.45 ms on one thread, and a single granule 1.3-7 ms against 0.12-0.16 ms."""
+"""Granule count from which the kernel uses all of numba's threads; below it one thread (each
+step opens several parallel regions, whose launch costs more than small systems gain:
+docs/performance.md)."""
 
 
 def soft_granules(
     spec: SceneSpec, polygons: PolygonSet, polygon_materials: list[str]
 ) -> SoftGranules:
-    """The scene's granules as :class:`~perga.contact.soft.SoftGranules` at step ``spec.dt``, with a
-    round chamber wall (the kernel's circle) and the ``polygons`` (hammers and a drawn wall: a
-    posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose ``mat`` indexes
-    ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
+    """The system's granules as :class:`~perga.contact.soft.SoftGranules` at step
+    ``spec.granule_dt``, with a round chamber wall (the kernel's circle) and the ``polygons``
+    (hammers and a drawn wall: a posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose
+    ``mat`` indexes ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
     materials = sorted({g.material for g in spec.granules})
     walls = []
     if spec.chamber is not None and spec.chamber.outline is None:
@@ -115,7 +114,7 @@ def soft_granules(
         mat=np.array([materials.index(x.material) for x in g], dtype=np.int32),
         walls=walls,
         gravity=spec.gravity,
-        dt=spec.dt,
+        dt=spec.granule_dt,
         polygons=polygons,
         polygon_table=polygon_table(spec, materials, polygon_materials),
         threads=None if len(g) >= THREADED_FROM else 1,

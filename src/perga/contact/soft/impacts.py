@@ -1,4 +1,4 @@
-"""Granule-hammer impacts of soft granules, as :class:`~perga.engine.simulation.Impact` rows.
+"""Granule-hammer impacts of soft granules, as :class:`~perga.model.records.Impact` rows.
 
 A soft impact lasts many granule steps. Between Pymunk steps the log compares each
 (granule, hammer) pair's contact flag in the kernel's polygon history: a pair that became active
@@ -20,8 +20,8 @@ import numpy as np
 
 from perga.contact.soft import SoftGranules
 from perga.contact.soft.polygon_set import HIST_ACTIVE, HIST_DISSIPATED, HIST_NORMAL_IMPULSE
-from perga.engine.simulation import HammerState, Impact
 from perga.geometry.disc_polygon import closest_feature
+from perga.model.records import HammerState, Impact
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class SoftImpactLog:
     """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
     of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
     its own); call :meth:`before` before and :meth:`after` after every kernel call.
-    ``hammer_state(h)`` gives hammer h's :class:`~perga.engine.simulation.HammerState` now."""
+    ``hammer_state(h)`` gives hammer h's :class:`~perga.model.records.HammerState` now."""
 
     def __init__(
         self,

@@ -7,7 +7,7 @@ centre of gravity. How a hammer resists a contact sets
 the contact's effective mass: a hinged hammer is ``PINNED`` at its hinge with I_A; a welded one
 is part of the rotor, ``KINEMATIC`` on a rotor held at ω or ``PINNED`` at the axis with the
 rotor's moment on a driven rotor; a free one is ``FREE`` with M and I_C. The wall's pieces
-(:func:`perga.engine.machine.chamber_pieces`) come after the hammers' and never move
+(:meth:`perga.model.spec.ChamberSpec.pieces`) come after the hammers' and never move
 (``KINEMATIC``, at rest); only the wall's inner and outer outlines make contacts.
 
 Timing (why the pose is taken ahead). Chipmunk's step drifts positions with the current
@@ -29,7 +29,7 @@ import pymunk
 
 from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
 from perga.engine import units as u
-from perga.engine.machine import Scene, chamber_inner_outline, chamber_pieces
+from perga.engine.machine import Machine
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
@@ -47,25 +47,25 @@ class MachinePolygons:
     ``materials`` lists the polygons' material names (the polygon table's columns).
     """
 
-    def __init__(self, scene: Scene) -> None:
-        self._scene = scene
-        self._bodies = scene.hammer_bodies
-        specs = scene.spec.hammers
-        chamber = scene.spec.chamber
+    def __init__(self, machine: Machine) -> None:
+        self._rotor = machine.rotor
+        self._bodies = machine.hammer_bodies
+        specs = machine.spec.hammers
+        chamber = machine.spec.chamber
         walled = chamber is not None and chamber.outline is not None
         names = {h.material for h in specs} | ({chamber.material} if walled else set())
         self.materials = sorted(names)
-        driven = scene.rotor.body_type == pymunk.Body.DYNAMIC
+        driven = machine.driven
         relative, owner, kinds, inertia, solid, corner = [], [], [], [], [], []
         for index, (h, body, shapes) in enumerate(
-            zip(specs, self._bodies, scene.hammer_shapes, strict=True)
+            zip(specs, self._bodies, machine.hammer_shapes, strict=True)
         ):
             cog = body.center_of_gravity
             pieces = [
                 counter_clockwise(np.array([tuple(v - cog) for v in s.get_vertices()])) * u.LENGTH
                 for s in shapes
             ]
-            outline = (np.array(scene.hammer_outlines[index]) - tuple(cog)) * u.LENGTH
+            outline = (np.array(machine.hammer_outlines[index]) - tuple(cog)) * u.LENGTH
             features = piece_features(pieces, [counter_clockwise(outline)])
             offset = sum(len(r) for r in relative)
             solid.append(features[0])
@@ -87,8 +87,8 @@ class MachinePolygons:
         n_hammer = len(relative)
         materials = [self.materials.index(specs[k].material) for k in owner]
         if walled:
-            pieces, outer = chamber_pieces(chamber)
-            loops = [outer, chamber_inner_outline(chamber)[::-1]]
+            pieces, outer = chamber.pieces()
+            loops = [outer, chamber.inner_outline()[::-1]]
             features = piece_features(pieces, loops)
             offset = len(self._relative)
             solid.append(features[0])
@@ -141,7 +141,7 @@ class MachinePolygons:
         p.com[: len(of)] = centre[of]
         p.velocity[: len(of)] = velocity[of]
         p.omega[: len(of)] = omega[of]
-        rotor = self._scene.rotor
+        rotor = self._rotor
         turn = rotor.angle + rotor.angular_velocity * u.ANGULAR_VELOCITY * ahead
         cr, sr = math.cos(turn), math.sin(turn)
         hx, hy = self._hinges[of, 0], self._hinges[of, 1]

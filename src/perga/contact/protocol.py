@@ -1,0 +1,99 @@
+"""What a contact model is to the simulation: the granules and every contact they make.
+
+The one :class:`~perga.engine.simulation.Simulation` steps the machine (rotor, hammers, joints,
+effects: Pymunk) and hands the granules to a contact model. A contact model is built on the
+machine (:data:`perga.contact.MODELS` names them) and attaches to it whatever it needs (Pymunk
+bodies and collision handlers, or arrays and a compiled kernel). Per machine step the
+simulation calls, in this order (:mod:`perga.engine.simulation` has the whole step order):
+
+1. the effects' kicks on :attr:`ContactModel.kinematics`;
+2. :meth:`ContactModel.before_machine_step`;
+3. Chipmunk's step of the space;
+4. :meth:`ContactModel.after_machine_step`, which returns the angular impulse about the axis
+   that the contacts put on the rotor-driven bodies (for the drive's work in the ledger).
+
+Everything is in SI at this interface except the kicks' arrays and that angular impulse, which
+are in Chipmunk's internal units (:mod:`perga.engine.units`), as the effects and the meter
+compute in them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from perga.model.records import Impact, LedgerTerms
+
+FloatArray = NDArray[np.float64]
+
+
+class GranuleKinematics(Protocol):
+    """All granules' velocities, read and written at once for the effects' kicks, internal units
+    (mm/ms; positions mm), rows in the spec's granule order."""
+
+    @property
+    def count(self) -> int:
+        """Number of granules."""
+        ...
+
+    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        """Velocities (n, 2) and, if asked for, positions (n, 2) (else None): fresh arrays."""
+        ...
+
+    def write_internal_velocities(self, velocities: FloatArray) -> None:
+        """Set every granule's velocity (n, 2)."""
+        ...
+
+
+@dataclass(frozen=True)
+class GranuleState:
+    """One consistent read of all granules, SI, rows in the spec's order (fresh arrays).
+
+    positions: centres, (n, 2), m; velocities: centre velocities, (n, 2), m/s;
+    angular_velocities: (n,), rad/s.
+    """
+
+    positions: FloatArray
+    velocities: FloatArray
+    angular_velocities: FloatArray
+
+
+class ContactModel(Protocol):
+    """Granules and their contacts (with each other, the hammers and the chamber wall).
+
+    granule_dt: the granules' step, s (the machine step divided by the model's substeps);
+    impacts: the granule-hammer impacts completed so far, in order.
+    """
+
+    granule_dt: float
+    impacts: list[Impact]
+
+    def kinematics(self) -> GranuleKinematics:
+        """The granules' velocities for the kicks (built on first use)."""
+        ...
+
+    def before_machine_step(self, time: float) -> None:
+        """Work before Chipmunk's step that ends at ``time`` (s)."""
+        ...
+
+    def after_machine_step(self, time: float) -> float:
+        """Work after Chipmunk's step that ended at ``time`` (s); returns the angular impulse
+        about the rotor axis the contacts put on the rotor-driven bodies during the step,
+        internal units (0 when energy is not tracked)."""
+        ...
+
+    def energy_terms(self) -> LedgerTerms:
+        """The ledger terms the model measures (see :mod:`perga.engine.energy`), J."""
+        ...
+
+    def granule_state(self) -> GranuleState:
+        """Positions, velocities and spins of the granules now."""
+        ...
+
+    def contact_counts(self) -> tuple[NDArray[np.int32], FloatArray] | None:
+        """Per granule, its contacts now and the largest of their overlaps (m), where the model
+        has overlaps; None where it has not (impulses)."""
+        ...

@@ -1,0 +1,227 @@
+"""The rigid contact model's Pymunk objects: granule bodies, the chamber wall, the contact values
+of every shape and the collision handlers, added to a machine's space.
+
+* Granules: dynamic bodies with one ``Circle`` each; moment m r²/2 or ``inf`` (sliding point).
+* Chamber: one convex quadrilateral per edge of the wall's inner outline on the space's static
+  body, ``wall_thickness`` thick (:meth:`perga.model.spec.ChamberSpec.pieces`). A round wall's
+  inner outline is the polygon of ``segments`` sides circumscribing the circle (at most
+  R(1/cos(π/N) − 1) outside it); a chamber from a file has its own outline. The wall shares the
+  hammers' filter group.
+* Contacts: Chipmunk multiplies the two shapes' elasticity and friction. Each material gets
+  factors whose products equal the pair table (:func:`factor_pair_table`: one granule material
+  gives 1 on it and the pair value on the others; granule-granule pairs take √), to within
+  1 ulp; only a pair the table cannot split this way gets a ``pre_solve`` handler that sets
+  ``arbiter.restitution`` and ``arbiter.friction`` (Chipmunk resets them to the product every
+  step, so it must be ``pre_solve``, not ``begin``; docs/performance.md has its cost).
+  Collision types are one per (kind, material). Each handler phase runs a list of listeners
+  (:meth:`RigidBodies.listen`), so that the pair setter and the impact recorder can share one
+  handler.
+* Filters: when ``granule_collisions`` is False all granules share a filter group, which
+  removes granule pairs before the narrow phase.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import pymunk
+
+from perga.engine import units as u
+from perga.engine.machine import HAMMER_GROUP, Machine
+from perga.model.spec import GranuleSpec
+
+Kind = Literal["granule", "hammer", "wall"]
+Phase = Literal["begin", "pre_solve", "post_solve", "separate"]
+Callback = Callable[[pymunk.Arbiter, pymunk.Space, Any], None]
+
+GRANULE_GROUP = 2
+"""Shape filter group of the granules when they do not collide with each other."""
+
+
+@dataclass
+class RigidBodies:
+    """The rigid model's objects in a machine's space.
+
+    ``shape_owner`` maps every granule and hammer shape to (kind, index into the spec's list);
+    ``wall_shapes`` are the chamber's. ``collision_types`` maps (kind, material) to the Chipmunk
+    collision type; ``pairs`` lists the (type_a, type_b) handlers installed, type_a being a
+    granule type.
+    """
+
+    machine: Machine
+    granule_bodies: list[pymunk.Body]
+    granule_shapes: list[pymunk.Circle]
+    wall_shapes: list[pymunk.Poly]
+    shape_owner: dict[pymunk.Shape, tuple[Kind, int]]
+    collision_types: dict[tuple[Kind, str], int]
+    pairs: list[tuple[int, int]] = field(default_factory=list)
+    handlers: dict[tuple[int, int, Phase], list[Callback]] = field(default_factory=dict)
+
+    @property
+    def space(self) -> pymunk.Space:
+        """The machine's space, which holds them."""
+        return self.machine.space
+
+    def listen(
+        self, phase: Phase, callback: Callback, kinds: tuple[Kind, Kind] | None = None
+    ) -> None:
+        """Run ``callback(arbiter, space, None)`` in ``phase`` of every installed pair handler
+        (shapes ordered granule first), or only of pairs of ``kinds`` (granule kind first)."""
+        for kind_a, kind_b, type_a, type_b in self._typed_pairs():
+            if kinds is None or (kind_a, kind_b) == kinds:
+                self.listen_pair(type_a, type_b, phase, callback)
+
+    def listen_pair(self, type_a: int, type_b: int, phase: Phase, callback: Callback) -> None:
+        """Run ``callback`` in ``phase`` of the handler of collision types (type_a, type_b)."""
+        key = (type_a, type_b, phase)
+        if key not in self.handlers:
+            self.handlers[key] = []
+            self.machine.space.on_collision(
+                type_a, type_b, data=self.handlers[key], **{phase: _dispatch}
+            )
+        self.handlers[key].append(callback)
+
+    def _typed_pairs(self) -> list[tuple[Kind, Kind, int, int]]:
+        kind_of = {t: k for (k, _), t in self.collision_types.items()}
+        return [(kind_of[a], kind_of[b], a, b) for a, b in self.pairs]
+
+
+def _dispatch(arbiter: pymunk.Arbiter, space: pymunk.Space, callbacks: list[Callback]) -> None:
+    for callback in callbacks:
+        callback(arbiter, space, None)
+
+
+def _ends(pair: frozenset[str]) -> tuple[str, str]:
+    """The two materials of a pair (the same one twice for a self pair)."""
+    items = sorted(pair)
+    return items[0], items[-1]
+
+
+def factor_pair_table(
+    table: dict[frozenset[str], float],
+) -> tuple[dict[str, float], set[frozenset[str]]]:
+    """Per-material factors whose pairwise products reproduce ``table`` (pair -> value).
+
+    A breadth-first walk over the material graph gives each material a factor from one pair,
+    starting from materials with a self pair (factor √value), else from factor 1; every pair
+    is then checked to a relative 4 ulp. Returns the factors and the pairs they do not
+    reproduce (those keep a per-contact setter). A zero factor stops the walk, so tables with
+    zeros split only where the zero can be carried by one material.
+    """
+    neighbours: dict[str, set[str]] = {}
+    for pair in table:
+        a, b = _ends(pair)
+        neighbours.setdefault(a, set()).add(b)
+        neighbours.setdefault(b, set()).add(a)
+    roots = sorted(neighbours, key=lambda m: (frozenset((m,)) not in table, m))
+    factors: dict[str, float] = {}
+    for root in roots:
+        if root in factors:
+            continue
+        self_value = table.get(frozenset((root,)))
+        factors[root] = math.sqrt(self_value) if self_value is not None else 1.0
+        queue = [root]
+        while queue:
+            a = queue.pop(0)
+            for b in sorted(neighbours[a]):
+                if b not in factors and factors[a] > 0:
+                    factors[b] = table[frozenset((a, b))] / factors[a]
+                    queue.append(b)
+    unsplit = set()
+    for pair, value in table.items():
+        a, b = _ends(pair)
+        product = factors.get(a, math.nan) * factors.get(b, math.nan)
+        if not (math.isfinite(product) and abs(product - value) <= 4 * 2.2e-16 * abs(value)):
+            unsplit.add(pair)
+    return factors, unsplit
+
+
+def _pair_setter(restitution: float, friction: float) -> Callback:
+    def set_pair(arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: Any) -> None:
+        arbiter.restitution, arbiter.friction = restitution, friction
+
+    return set_pair
+
+
+def _build_granule(g: GranuleSpec) -> tuple[pymunk.Body, pymunk.Circle]:
+    mass = u.to_internal(g.mass, u.MASS)
+    moment = u.to_internal(g.moment, u.MOMENT) if g.rolls else math.inf
+    body = pymunk.Body(mass, moment)
+    body.position = u.vec_to_internal(g.position, u.LENGTH)
+    body.velocity = u.vec_to_internal(g.velocity, u.VELOCITY)
+    body.angular_velocity = u.to_internal(g.angular_velocity, u.ANGULAR_VELOCITY)
+    return body, pymunk.Circle(body, u.to_internal(g.radius, u.LENGTH))
+
+
+def attach_bodies(machine: Machine) -> RigidBodies:
+    """Add the granules, the chamber wall, every shape's contact values and the pair handlers
+    to ``machine``'s space (module doc)."""
+    spec, space = machine.spec, machine.space
+    collision_types: dict[tuple[Kind, str], int] = {}
+
+    def ctype(kind: Kind, material: str) -> int:
+        return collision_types.setdefault((kind, material), len(collision_types) + 1)
+
+    contacts = {c.key: c for c in spec.contacts}
+    elasticity, unsplit_e = factor_pair_table({k: c.restitution for k, c in contacts.items()})
+    friction, unsplit_f = factor_pair_table({k: c.friction for k, c in contacts.items()})
+
+    def set_values(shape: pymunk.Shape, kind: Kind, material: str) -> None:
+        shape.elasticity = elasticity.get(material, 1.0)
+        shape.friction = friction.get(material, 1.0)
+        shape.collision_type = ctype(kind, material)
+
+    shape_owner: dict[pymunk.Shape, tuple[Kind, int]] = {}
+    for index, (h, shapes) in enumerate(zip(spec.hammers, machine.hammer_shapes, strict=True)):
+        for shape in shapes:
+            set_values(shape, "hammer", h.material)
+            shape_owner[shape] = ("hammer", index)
+
+    granule_bodies: list[pymunk.Body] = []
+    granule_shapes: list[pymunk.Circle] = []
+    granule_group = 0 if spec.granule_collisions else GRANULE_GROUP
+    for index, g in enumerate(spec.granules):
+        body, shape = _build_granule(g)
+        space.add(body)
+        shape.filter = pymunk.ShapeFilter(group=granule_group)
+        set_values(shape, "granule", g.material)
+        space.add(shape)
+        granule_bodies.append(body)
+        granule_shapes.append(shape)
+        shape_owner[shape] = ("granule", index)
+
+    wall_shapes: list[pymunk.Poly] = []
+    if spec.chamber is not None:
+        static = space.static_body
+        for piece in spec.chamber.pieces()[0]:
+            shape = pymunk.Poly(static, [u.vec_to_internal(tuple(v), u.LENGTH) for v in piece])
+            shape.filter = pymunk.ShapeFilter(group=HAMMER_GROUP)
+            set_values(shape, "wall", spec.chamber.material)
+            space.add(shape)
+            wall_shapes.append(shape)
+
+    bodies = RigidBodies(
+        machine=machine,
+        granule_bodies=granule_bodies,
+        granule_shapes=granule_shapes,
+        wall_shapes=wall_shapes,
+        shape_owner=shape_owner,
+        collision_types=collision_types,
+    )
+    granule_keys = [k for k in collision_types if k[0] == "granule"]
+    other_keys = [k for k in collision_types if k[0] != "granule"]
+    candidate = [(g, h) for g in granule_keys for h in other_keys]
+    if spec.granule_collisions:
+        candidate += [(a, b) for i, a in enumerate(granule_keys) for b in granule_keys[i:]]
+    for key_a, key_b in candidate:
+        contact = spec.contact(key_a[1], key_b[1])
+        type_a, type_b = collision_types[key_a], collision_types[key_b]
+        bodies.pairs.append((type_a, type_b))
+        if contact.key in unsplit_e | unsplit_f:
+            bodies.listen_pair(
+                type_a, type_b, "pre_solve", _pair_setter(contact.restitution, contact.friction)
+            )
+    return bodies

@@ -1,0 +1,134 @@
+"""Granule-hammer impacts of rigid (impulse) contacts, as :class:`~perga.model.records.Impact`
+rows.
+
+An impact is the first step of a granule-hammer contact. Chipmunk moves the bodies, then finds
+contacts: a new contact's ``begin`` (or its first processed ``pre_solve`` where contacts are
+filtered) stores the relative contact velocity, the granule's kinetic energy and velocity and
+the hammer's state, read after the step's position update and before its impulses; its first
+``post_solve`` completes the row with the velocities after the impulses, the impulse and the
+energy dissipated in the contact, −J·v̄_rel with v̄_rel the mean of the relative contact velocity
+before and after (exact for one impulse).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import pymunk
+
+from perga.contact.rigid.bodies import RigidBodies
+from perga.engine import units as u
+from perga.model.records import HammerState, Impact
+
+
+def _contact(arbiter: pymunk.Arbiter) -> tuple[pymunk.Vec2d, pymunk.Vec2d, pymunk.Vec2d]:
+    """Relative velocity granule − hammer at the contact point (internal units), the point and
+    the hammer's outward normal. Shapes are ordered (granule, hammer)."""
+    granule_shape, hammer_shape = arbiter.shapes
+    outward = -arbiter.normal  # arbiter.normal points from the granule to the hammer
+    points = arbiter.contact_point_set.points
+    p = (points[0].point_a + points[0].point_b) * 0.5
+    v_g = granule_shape.body.velocity_at_world_point(p)
+    v_h = hammer_shape.body.velocity_at_world_point(p)
+    return v_g - v_h, p, outward
+
+
+def _granule_energy(body: pymunk.Body) -> float:
+    """Kinetic energy of a granule body, internal units (a sliding point has moment inf)."""
+    spin = 0.0 if math.isinf(body.moment) else 0.5 * body.moment * body.angular_velocity**2
+    return 0.5 * body.mass * body.velocity.length_squared + spin
+
+
+_Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, HammerState]
+
+
+class ImpactRecorder:
+    """Records the first step of every granule-hammer contact as an :class:`Impact`.
+
+    A granule touching two convex pieces of one hammer in the same step (a notch) makes two
+    Chipmunk contacts but one impact: their impulses along the first contact's normal and their
+    dissipation are summed into the first one's row. With ``filtered`` (hammers of several
+    pieces: :mod:`~perga.contact.rigid.outline` drops contacts in ``pre_solve``) an impact
+    starts at a contact's first step that is processed, not at its ``begin``.
+    """
+
+    def __init__(self, bodies: RigidBodies, *, filtered: bool = False) -> None:
+        self.impacts: list[Impact] = []
+        self.time = 0.0
+        self._machine = bodies.machine
+        self._owner = bodies.shape_owner
+        # (granule shape, hammer shape) -> relative contact velocity, granule KE and velocity,
+        # hammer state (None once recorded); (granule, hammer) -> its impact's row in this step
+        self._pending: dict[tuple[pymunk.Shape, pymunk.Shape], _Pending | None] = {}
+        self._rows: dict[tuple[int, int], int] = {}
+        self._rows_time = -1.0
+        start = "pre_solve" if filtered else "begin"
+        bodies.listen(start, self._start, ("granule", "hammer"))
+        bodies.listen("post_solve", self._post_solve, ("granule", "hammer"))
+        bodies.listen("separate", self._separate, ("granule", "hammer"))
+
+    def _key(self, arbiter: pymunk.Arbiter) -> tuple[int, int]:
+        granule_shape, hammer_shape = arbiter.shapes
+        return self._owner[granule_shape][1], self._owner[hammer_shape][1]
+
+    def _start(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        if not arbiter.process_collision or tuple(arbiter.shapes) in self._pending:
+            return
+        relative, _, _ = _contact(arbiter)
+        body = arbiter.shapes[0].body
+        state = self._machine.hammer_state(self._key(arbiter)[1])
+        pending = (relative, _granule_energy(body), body.velocity, state)
+        self._pending[tuple(arbiter.shapes)] = pending  # type: ignore[index]
+
+    def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        shapes = tuple(arbiter.shapes)
+        pending = self._pending.get(shapes)  # type: ignore[call-overload]
+        if pending is None:
+            return
+        self._pending[shapes] = None  # type: ignore[index]
+        key = self._key(arbiter)
+        before, granule_energy, granule_velocity, hammer = pending
+        after, point, n = _contact(arbiter)
+        t = n.perpendicular()
+        # measured: total_impulse is the impulse on the first shape's body (the granule)
+        impulse = arbiter.total_impulse
+        joule = u.to_si(1.0, u.ENERGY)
+        dissipated = -impulse.dot((before + after) * 0.5) * joule
+        if self._rows_time != self.time:
+            self._rows, self._rows_time = {}, self.time
+        row = self._rows.get(key)
+        if row is not None:  # a second piece of the same hammer in the same step
+            first = self.impacts[row]
+            n_first = pymunk.Vec2d(*first.normal)
+            self.impacts[row] = replace(
+                first,
+                normal_impulse=first.normal_impulse + u.to_si(impulse.dot(n_first), u.IMPULSE),
+                dissipated=first.dissipated + dissipated,
+            )
+            return
+        self._rows[key] = len(self.impacts)
+        self.impacts.append(
+            Impact(
+                time=self.time,
+                granule=key[0],
+                hammer=key[1],
+                normal_velocity_before=u.to_si(before.dot(n), u.VELOCITY),
+                normal_velocity_after=u.to_si(after.dot(n), u.VELOCITY),
+                tangential_velocity_before=u.to_si(before.dot(t), u.VELOCITY),
+                tangential_velocity_after=u.to_si(after.dot(t), u.VELOCITY),
+                normal_impulse=u.to_si(impulse.dot(n), u.IMPULSE),
+                point=u.vec_to_si(tuple(point), u.LENGTH),
+                normal=(n.x, n.y),
+                granule_energy_gain=(_granule_energy(arbiter.shapes[0].body) - granule_energy)
+                * joule,
+                dissipated=dissipated,
+                hammer_energy_before=hammer.energy,
+                granule_velocity_before=u.vec_to_si(tuple(granule_velocity), u.VELOCITY),
+                hammer_swing_angle_before=hammer.swing_angle,
+                hammer_angular_velocity_before=hammer.angular_velocity,
+            )
+        )
+
+    def _separate(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        self._pending.pop(tuple(arbiter.shapes), None)  # type: ignore[arg-type]

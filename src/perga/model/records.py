@@ -1,0 +1,134 @@
+"""What a simulation reports besides its state, SI units: impacts, hammer states and the energy
+ledger. Plain frozen dataclasses, written by the contact models and the engine, read by the
+recorders and the statistics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+TINY = 1e-30
+"""J: the closure's denominator floor (a scene where nothing moves has closure 0)."""
+
+
+@dataclass(frozen=True)
+class HammerState:
+    """A hammer at one instant: kinetic energy ½Mv_c² + ½I_cΩ², J; swing angle α, rad; absolute
+    angular velocity Ω, rad/s (welded hammers move with the rotor: their α is the spec's)."""
+
+    energy: float
+    swing_angle: float
+    angular_velocity: float
+
+
+@dataclass(frozen=True)
+class Impact:
+    """One granule-hammer impact, SI units.
+
+    time: s, the end of the machine step in which the contact began; granule, hammer: indices in
+    the spec; normal_velocity_before/after: the granule's velocity relative to the hammer's
+    material point at the contact, along the hammer's outward normal n (m/s; < 0 approaching,
+    > 0 separating); tangential_velocity_before/after: the same along t = n turned +90° (m/s);
+    normal_impulse: impulse on the granule along n, N·s (>= 0); point: contact point, m;
+    normal: n; granule_energy_gain: change of the granule's kinetic energy (translation and
+    spin) over the impact, J; dissipated: energy lost in this contact, J;
+    hammer_energy_before: the hammer's kinetic energy ½Mv_c² + ½I_cΩ² at the impact's start, J;
+    granule_velocity_before: the granule's velocity in the fixed frame before the impact, m/s;
+    hammer_swing_angle_before, hammer_angular_velocity_before: the hammer's α (rad) and absolute
+    angular velocity Ω (rad/s) at the impact's start. Each contact model says what "before" and
+    "after" are for its contacts (:mod:`perga.contact.rigid.impacts`,
+    :mod:`perga.contact.soft.impacts`).
+    """
+
+    time: float
+    granule: int
+    hammer: int
+    normal_velocity_before: float
+    normal_velocity_after: float
+    tangential_velocity_before: float
+    tangential_velocity_after: float
+    normal_impulse: float
+    point: tuple[float, float]
+    normal: tuple[float, float]
+    granule_energy_gain: float
+    dissipated: float
+    hammer_energy_before: float
+    granule_velocity_before: tuple[float, float]
+    hammer_swing_angle_before: float
+    hammer_angular_velocity_before: float
+
+
+@dataclass(frozen=True)
+class EnergyLedger:
+    """Cumulative energy terms since t = 0, J (SI); ``closure`` is dimensionless.
+
+    The terms and the closure are defined in :mod:`perga.engine.energy`."""
+
+    kinetic: float
+    """Current kinetic energy of all moving bodies and granules (translation and rotation)."""
+    kinetic_initial: float
+    """Kinetic energy at t = 0."""
+    drive_work: float
+    """Work done by the rotor (kinematic or driven) on the other bodies."""
+    gravity_work: float
+    """Work done by in-plane gravity (potential energy released)."""
+    contact_dissipation: float
+    """Energy lost in granule-hammer, granule-granule and granule-wall contacts."""
+    friction: float
+    """Energy removed by floor and hinge friction."""
+    drag: float
+    """Energy removed by air drag."""
+    closure: float
+    """(drive + gravity − ΔKE − Δelastic − contact − friction − drag) / energy scale."""
+    elastic: float = 0.0
+    """Energy stored in soft contacts now (0 with rigid contacts)."""
+    elastic_initial: float = 0.0
+    """Energy stored in soft contacts at t = 0."""
+
+
+@dataclass(frozen=True)
+class LedgerTerms:
+    """The measured terms of a ledger before closing it (J), as one part of a simulation measures
+    them (the machine's meter, a contact model): see :class:`EnergyLedger`; ``moved`` is
+    ½Σ_i|ΔKE_i|, the kinetic energy moved between bodies. Parts add up with ``+``."""
+
+    kinetic: float = 0.0
+    kinetic_initial: float = 0.0
+    moved: float = 0.0
+    drive_work: float = 0.0
+    gravity_work: float = 0.0
+    contact_dissipation: float = 0.0
+    friction: float = 0.0
+    drag: float = 0.0
+    elastic: float = 0.0
+    elastic_initial: float = 0.0
+
+    def __add__(self, other: LedgerTerms) -> LedgerTerms:
+        return LedgerTerms(
+            **{f.name: getattr(self, f.name) + getattr(other, f.name) for f in fields(self)}
+        )
+
+    def close(self) -> EnergyLedger:
+        """The ledger with its closure: the residual over the largest of |drive_work|, |ΔKE +
+        Δelastic|, |gravity_work|, ``moved`` and :data:`TINY`."""
+        change = self.kinetic - self.kinetic_initial + self.elastic - self.elastic_initial
+        residual = (
+            self.drive_work
+            + self.gravity_work
+            - change
+            - self.contact_dissipation
+            - self.friction
+            - self.drag
+        )
+        scale = max(abs(self.drive_work), abs(change), abs(self.gravity_work), self.moved, TINY)
+        return EnergyLedger(
+            kinetic=self.kinetic,
+            kinetic_initial=self.kinetic_initial,
+            drive_work=self.drive_work,
+            gravity_work=self.gravity_work,
+            contact_dissipation=self.contact_dissipation,
+            friction=self.friction,
+            drag=self.drag,
+            closure=residual / scale,
+            elastic=self.elastic,
+            elastic_initial=self.elastic_initial,
+        )

@@ -1,0 +1,176 @@
+"""The import rules of docs/architecture.md, read from the sources (every import, those inside
+functions included), and the rules that keep the parts apart: no ``isinstance`` on a simulation or
+contact-model class, no private member of another package read."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "perga"
+
+ALLOWED: dict[str, set[str]] = {
+    "analytic": {"analytic"},
+    "geometry": {"geometry"},
+    "case": {"case", "analytic", "geometry"},
+    "model": {"model", "case", "analytic", "geometry"},
+    "engine": {"engine", "model", "analytic", "geometry", "contact", "contact.protocol"},
+    "contact": {"contact", "engine", "model", "analytic", "geometry"},
+    "output": {"output", "model", "geometry", "analytic"},
+    "stats": {"stats", "case", "analytic", "model"},
+    "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
+                "runner", "__init__"},
+    "runner": {"runner", "case", "model", "engine", "output"},
+    "cli": {"cli", "__init__", "case", "analytic", "model", "studies", "output", "runner", "stats"},
+    "__init__": set(),
+}  # fmt: skip
+"""Part -> the parts it may import. ``engine`` may import the contact-model registry
+(``perga.contact``) and its protocol, never a contact model; ``contact`` may import the engine's
+machine; ``case``, ``stats`` and ``output`` never import the engine or a contact model; nothing
+imports the CLI."""
+
+
+def part_of(module: str) -> str:
+    """The part a module belongs to: perga.engine.machine -> engine, perga.cli -> cli."""
+    return module.split(".")[1] if module.count(".") else "__init__"
+
+
+def module_named(name: str) -> str:
+    """The module an imported name lives in: the longest prefix that is a file or package under
+    src/perga (``perga.contact.contact_model`` is the registry's function, in perga.contact)."""
+    parts = name.split(".")
+    for k in range(len(parts), 1, -1):
+        path = SRC.joinpath(*parts[1:k])
+        if path.with_suffix(".py").is_file() or (path / "__init__.py").is_file():
+            return ".".join(parts[:k])
+    return "perga"
+
+
+def imported_part(name: str) -> str:
+    """The part an import reaches: perga.engine.units -> engine; inside perga.contact the
+    registry (contact), its protocol (contact.protocol) and each model (contact.rigid,
+    contact.soft) are told apart."""
+    parts = module_named(name).split(".")[1:]
+    if not parts:
+        return "__init__"
+    if parts[0] == "contact" and len(parts) > 1:
+        return "contact." + parts[1]
+    return parts[0]
+
+
+def imports(path: Path, module: str) -> list[tuple[int, str]]:
+    """(line, absolute name) of every perga import in the file, relative ones resolved."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names if a.name.startswith("perga")]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                name = f"{base}.{node.module}" if node.module else base
+            else:
+                name = node.module or ""
+            if name.startswith("perga"):
+                out += [(node.lineno, f"{name}.{a.name}") for a in node.names]
+    return out
+
+
+def modules() -> list[tuple[Path, str]]:
+    """Every source file and its module name."""
+    out = []
+    for path in sorted(SRC.rglob("*.py")):
+        parts = ("perga", *path.relative_to(SRC).with_suffix("").parts)
+        out.append((path, ".".join(parts).removesuffix(".__init__")))
+    return out
+
+
+def violations(found: list[tuple[str, int, str]]) -> list[str]:
+    """The imports among (module, line, imported name) that break :data:`ALLOWED`. A part may
+    always import itself; the engine only the contact registry and protocol by name, the
+    other parts any of perga.contact where they may import "contact"."""
+    bad = []
+    for module, line, name in found:
+        source, target = part_of(module), imported_part(name)
+        allowed = ALLOWED[source]
+        own = target.split(".")[0] == source
+        by_prefix = source != "engine" and target.split(".")[0] in allowed
+        if own or target in allowed or by_prefix:
+            continue
+        bad.append(f"{module}:{line} imports {name} ({source} may not import {target})")
+    return bad
+
+
+def test_import_rules_hold() -> None:
+    found = [(m, line, name) for path, m in modules() for line, name in imports(path, m)]
+    assert len(found) > 200  # the scan sees the package
+    assert violations(found) == []
+
+
+@pytest.mark.parametrize(
+    ("module", "name"),
+    [
+        ("perga.analytic.paper", "perga.engine.simulation"),
+        ("perga.engine.simulation", "perga.contact.soft.model"),
+        ("perga.engine.simulation", "perga.contact.rigid.bodies"),
+        ("perga.output.vtk", "perga.engine.machine"),
+        ("perga.output.vtk", "perga.contact.soft.polygon_set"),
+        ("perga.case.checks", "perga.model.spec"),
+        ("perga.stats.energy", "perga.engine.energy"),
+        ("perga.runner", "perga.contact.rigid.model"),
+        ("perga.studies.compare", "perga.cli"),
+        ("perga.model.frame", "perga.output.tables"),
+    ],
+)
+def test_the_rules_catch_a_forbidden_import(module: str, name: str) -> None:
+    """Each rule is seen to fail: a forbidden import is reported."""
+    assert violations([(module, 1, name)]), (module, name)
+
+
+@pytest.mark.parametrize(
+    ("module", "name"),
+    [
+        ("perga.engine.simulation", "perga.contact.contact_model"),
+        ("perga.engine.simulation", "perga.contact.protocol.ContactModel"),
+        ("perga.contact.soft.model", "perga.engine.machine.Machine"),
+        ("perga.runner", "perga.engine.simulation"),
+        ("perga.output.vtk", "perga.model.frame"),
+    ],
+)
+def test_the_rules_allow_what_the_architecture_allows(module: str, name: str) -> None:
+    assert violations([(module, 1, name)]) == []
+
+
+def _calls(tree: ast.AST):
+    return [n for n in ast.walk(tree) if isinstance(n, ast.Call)]
+
+
+def test_no_isinstance_on_a_simulation_or_contact_model() -> None:
+    """The choice of contact model is the registry's (perga.contact.MODELS), not an ``if``."""
+    bad = []
+    for path, module in modules():
+        for call in _calls(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(call.func, ast.Name) and call.func.id == "isinstance":
+                names = ast.unparse(call.args[1]) if len(call.args) > 1 else ""
+                if any(k in names for k in ("Simulation", "Contacts", "SoftGranules", "Machine")):
+                    bad.append(f"{module}:{call.lineno}: isinstance(..., {names})")
+    assert bad == []
+
+
+def test_no_private_member_of_another_package_is_read() -> None:
+    """``x._name`` only on ``self``/``cls``, or on an object of the module's own package."""
+    bad = []
+    for path, module in modules():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.Attribute)
+                and node.attr.startswith("_")
+                and not node.attr.startswith("__")
+                and not (isinstance(node.value, ast.Name) and node.value.id in {"self", "cls"})
+            ):
+                bad.append(f"{module}:{node.lineno}: {ast.unparse(node)}")
+    assert bad == []
