@@ -10,9 +10,13 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from perga import __version__
 from perga.case import CaseError, load_case
+
+if TYPE_CHECKING:
+    pass
 
 BUNDLED_CASES = Path(__file__).resolve().parents[2] / "cases"
 
@@ -96,7 +100,7 @@ def _run(args: argparse.Namespace) -> int:
 
     from perga.runner import RunStoppedError, prepare_directory, run_case
 
-    case = load_case(args.case)
+    case = load_case(args.case, overrides=args.set or ())
     directory = args.output or Path(case.output.directory.format(case=args.case.stem))
     try:
         prepare_directory(directory, args.overwrite)
@@ -180,6 +184,136 @@ def _compare(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _bar(total: int, quiet: bool, unit: str = "run"):
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit=unit, disable=quiet, file=sys.stderr)
+
+
+def _study_from_args(args: argparse.Namespace):
+    """The study of ``perga sweep``: a study file, or a case with --set and --metric."""
+    from perga.case.load import read_case_data
+    from perga.studies.study_file import StudyError, load_study, study_from_options
+
+    data = read_case_data(args.target)
+    if "parameters" in data and "case" in data:
+        if args.set or args.metric:
+            raise StudyError([f"{args.target}: a study file takes no --set or --metric"])
+        return load_study(args.target)
+    return study_from_options(
+        args.target, args.set or [], args.metric or [], args.replicates, args.seed
+    )
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from perga.studies.study_file import StudyError
+    from perga.studies.sweep import sweep
+    from perga.studies.sweep_report import write_plots
+
+    try:
+        study = _study_from_args(args)
+    except StudyError as exc:
+        for problem in exc.problems:
+            print(f"error: {problem}", file=sys.stderr)
+        return 2
+    bar = _bar(0, args.quiet)
+
+    def progress(done: int, total: int) -> None:
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    start = time.perf_counter()
+    try:
+        result = sweep(
+            study,
+            args.output,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            retry_failed=args.retry_failed,
+            progress=progress,
+        )
+    except KeyboardInterrupt:
+        bar.close()
+        print(
+            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
+    bar.close()
+    plots = write_plots(result.rows, list(study.parameters), study.metrics, args.output)
+    print(
+        f"{len(result.rows)} runs ({result.ran} run now, {result.reused} found finished, "
+        f"{result.failed} failed) in {time.perf_counter() - start:.1f} s -> {result.path}, "
+        f"{len(plots)} plots"
+    )
+    if result.failed:
+        print(
+            f"warning: {result.failed} runs failed: their status and reason are in "
+            f"{result.path}; --retry-failed runs them again",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from perga.studies.calibrate import calibrate
+    from perga.studies.study_file import StudyError
+
+    load_case(args.case)  # the case itself first: its problems are a case file's
+    start = time.perf_counter()
+    try:
+        fit = calibrate(
+            args.case,
+            args.data,
+            args.fit,
+            args.output,
+            method=args.method,
+            steps=args.steps,
+            scheduler=args.scheduler,
+            workers=args.workers,
+        )
+    except StudyError as exc:
+        for problem in exc.problems:
+            print(f"error: {problem}", file=sys.stderr)
+        return 2
+    for key, value, (lo, hi) in zip(fit.keys, fit.values, fit.intervals, strict=True):
+        print(f"{key} = {value:.6g}  (95 %: {lo:.6g} to {hi:.6g})")
+    print(
+        f"{fit.method}: {fit.runs} runs, residual sum of squares {fit.rss:.4g}, "
+        f"{time.perf_counter() - start:.1f} s -> {args.output}/best.toml, fit.json"
+    )
+    return 0
+
+
+def _metrics(args: argparse.Namespace) -> int:
+    from perga.stats import load_run
+    from perga.stats.metrics import METRICS, MetricUnavailableError, evaluate
+
+    if args.run is None:
+        for m in METRICS.values():
+            arg = f":ARG ({m.argument})" if m.argument else ""
+            print(f"{m.name}{arg} [{m.unit}]: {m.description}")
+        return 0
+    try:
+        run = load_run(args.run)
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    status = 0
+    for name in args.names or [n for n, m in METRICS.items() if m.argument is None]:
+        try:
+            print(f"{name} = {evaluate(run, name):.10g}")
+        except MetricUnavailableError as exc:
+            print(f"{name}: unavailable: {exc}")
+        except ValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            status = 2
+    return status
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
@@ -209,6 +343,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("-o", "--output", type=Path, help="run directory (default: output.directory)")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a key of the case, e.g. rotor.rpm=2400 or "
+        "contacts.granule-hammer.restitution=0.65 (repeat for several; checked like the file)",
+    )
     run.set_defaults(handler=_run)
     render = sub.add_parser("render", help="a preview PNG of a run (matplotlib, no OpenGL)")
     render.add_argument("run", type=Path, metavar="RUN", help="a run directory")
@@ -236,6 +377,54 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
     compare.add_argument("--processes", type=int, default=2, help="--paper runs in parallel")
     compare.set_defaults(handler=_compare)
+    sweep = sub.add_parser(
+        "sweep",
+        help="run a case over parameter values on Dask: results.parquet and plots",
+        description="Run a study (a study file, or a case with --set KEY=V1,V2 or "
+        "KEY=LO:HI:N and --metric NAME) on a local Dask cluster or the one at --scheduler. "
+        "Finished runs are found by key and not run again.",
+    )
+    sweep.add_argument("target", type=Path, metavar="STUDY_OR_CASE")
+    sweep.add_argument("-o", "--output", type=Path, required=True, help="the study's folder")
+    sweep.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUES",
+        help="a case key and its values: V1,V2,... or LO:HI:N (a grid)",
+    )
+    sweep.add_argument("--metric", action="append", metavar="NAME", help="a metric to keep")
+    sweep.add_argument("--replicates", type=int, default=1, help="runs per point (own seeds)")
+    sweep.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
+    sweep.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
+    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    sweep.add_argument("--retry-failed", action="store_true", help="run failed runs again")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(handler=_sweep)
+    calibrate = sub.add_parser(
+        "calibrate",
+        help="fit case keys to measured data (least squares or Bayesian) on Dask",
+        description="Each data row is simulated with its condition columns and the fitted "
+        "keys; writes best.toml, fit.json and plots.",
+    )
+    calibrate.add_argument("case", type=Path, metavar="CASE")
+    calibrate.add_argument("--data", type=Path, required=True, help="CSV: conditions, metrics")
+    calibrate.add_argument(
+        "--fit",
+        action="append",
+        required=True,
+        metavar="KEY=LO:HI",
+        help="a case key to fit and its bounds",
+    )
+    calibrate.add_argument("--method", choices=("least-squares", "bayes"), default="least-squares")
+    calibrate.add_argument("--steps", type=int, default=100, help="bayes: emcee steps")
+    calibrate.add_argument("-o", "--output", type=Path, required=True, help="output folder")
+    calibrate.add_argument("--workers", type=int, help="local worker processes")
+    calibrate.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    calibrate.set_defaults(handler=_calibrate)
+    metrics = sub.add_parser("metrics", help="the metrics of a run (or, without RUN, the list)")
+    metrics.add_argument("run", type=Path, nargs="?", metavar="RUN")
+    metrics.add_argument("names", nargs="*", metavar="NAME")
+    metrics.set_defaults(handler=_metrics)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)

@@ -22,6 +22,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 from perga.case.schema import Case
 from perga.engine.simulation import Simulation
@@ -40,6 +41,7 @@ class RunSummary:
     """What summary.json holds (SI units)."""
 
     case: str
+    overrides: list[str] = field(default_factory=list)
     status: str = "running"
     reason: str = ""
     steps: int = 0
@@ -54,6 +56,19 @@ class RunSummary:
     frames: int = 0
     energy: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+
+
+def write_case_copy(case: Case, case_path: Path, destination: Path) -> None:
+    """The case as run: the file itself, or with overrides the file's data with them applied
+    (TOML, the overrides listed in a comment at the top)."""
+    if not case.overrides or case.source_data is None:
+        shutil.copyfile(case_path, destination)
+        return
+    header = "".join(f"# --set {o}\n" for o in case.overrides)
+    text = f"# {case_path} as run, with these overrides:\n{header}\n" + tomli_w.dumps(
+        case.source_data, multiline_strings=True
+    )
+    destination.write_text(text, encoding="utf-8")
 
 
 def prepare_directory(directory: Path, overwrite: bool) -> None:
@@ -122,8 +137,8 @@ def run_case(
     """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
     is also written to summary.json. KeyboardInterrupt and RunStoppedError are recorded in the
     summary and re-raised after everything written so far is flushed."""
-    shutil.copyfile(case_path, directory / "case.toml")
-    summary = RunSummary(case=str(case_path.resolve()))
+    write_case_copy(case, case_path, directory / "case.toml")
+    summary = RunSummary(case=str(case_path.resolve()), overrides=list(case.overrides))
     start = time.perf_counter()
     recorders: list[Recorder] = []
     sim: Simulation | None = None

@@ -16,8 +16,8 @@ import numpy as np
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry, hinge_misses, hinge_positions, rotor_geometry
-from perga.case.placement import initial_state
-from perga.case.schema import Case, ExplicitPlacement, RandomPlacement
+from perga.case.placement import face, initial_state
+from perga.case.schema import Case, ExplicitPlacement, RandomPlacement, ShotPlacement
 from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
 from perga.geometry.wall import wall_pieces
 
@@ -144,6 +144,10 @@ def _granules(case: Case) -> list[str]:
                 "granules.placement.velocities: needs one entry per position "
                 f"({len(placement.positions)}, got {len(placement.velocities)})"
             )
+    if isinstance(placement, ShotPlacement):
+        problems += _shot(case, placement)
+        if problems:
+            return problems
     if isinstance(placement, RandomPlacement):
         if not placement.inner_radius + g.radius <= placement.outer_radius <= limit:
             problems.append(
@@ -178,6 +182,20 @@ def _granules(case: Case) -> list[str]:
         ]
         if len(i) > 5:
             problems.append(f"granules.placement: ... and {len(i) - 5} more overlapping pairs")
+    return problems
+
+
+def _shot(case: Case, placement: ShotPlacement) -> list[str]:
+    """A shot is one granule aimed at hammer 0's face."""
+    problems = []
+    if case.granules.count != 1:
+        problems.append(f"granules.count: a shot fires one granule (got {case.granules.count})")
+    x0, x1, _ = face(case)
+    if placement.along is not None and not x0 <= placement.along <= x1:
+        problems.append(
+            f"granules.placement.along: must be on hammer 0's face, [{x0:g}, {x1:g}] m from "
+            f"the hinge (got {placement.along:g})"
+        )
     return problems
 
 

@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import difflib
 import tomllib
+import typing
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from perga.case.checks import check_case
+from perga.case.overrides import OverrideError, apply_overrides, split_override
 from perga.case.schema import Case
 
 
@@ -26,59 +29,114 @@ class CaseError(Exception):
         self.problems = problems
 
 
-def _model_at(loc: tuple[Any, ...]) -> type[BaseModel] | None:
-    """The schema model that owns the key at ``loc`` (for "did you mean" suggestions)."""
-    model: Any = Case
-    for part in loc[:-1]:
-        if isinstance(part, int) or not (isinstance(model, type) and issubclass(model, BaseModel)):
+def _models(annotation: Any) -> list[type[BaseModel]]:
+    """The schema models an annotation can hold (one, or a union's members)."""
+    args = typing.get_args(annotation) or (annotation,)
+    out = []
+    for arg in args:
+        out += _models(arg) if typing.get_args(arg) else []
+        if isinstance(arg, type) and issubclass(arg, BaseModel):
+            out.append(arg)
+    return out
+
+
+def _kind(model: type[BaseModel]) -> str | None:
+    field = model.model_fields.get("kind")
+    values = typing.get_args(field.annotation) if field else ()
+    return str(values[0]) if len(values) == 1 else None
+
+
+def _resolve(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | None]:
+    """``loc`` without the tags pydantic adds for a union member (``placement.shot.angle`` ->
+    ``placement.angle``), and the model that owns its last key."""
+    models: list[type[BaseModel]] = [Case]
+    clean: list[Any] = []
+    for i, part in enumerate(loc):
+        if isinstance(part, int):
+            clean.append(part)
             continue
-        field = model.model_fields.get(part)
-        if field is None:
-            return None
-        model = field.annotation
-        args = getattr(model, "__args__", ())
-        model = next((a for a in args if isinstance(a, type) and issubclass(a, BaseModel)), model)
-    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+        tagged = [m for m in models if _kind(m) == part]
+        if tagged and len(models) > 1:
+            models = tagged  # the member pydantic names by its kind: not a key of the file
+            continue
+        clean.append(part)
+        if i == len(loc) - 1:
+            break
+        owner = next((m for m in models if part in m.model_fields), None)
+        if owner is None:
+            return tuple(clean), None
+        models = _models(owner.model_fields[part].annotation)
+    owner = next((m for m in models if loc and str(loc[-1]) in m.model_fields), None)
+    if owner is None and len(models) == 1:
+        owner = models[0]
+    return tuple(clean), owner
 
 
 def _describe(error: dict[str, Any]) -> str:
-    loc = tuple(error["loc"])
+    loc, owner = _resolve(tuple(error["loc"]))
     key = ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in loc).replace(".[", "[")
     if error["type"] == "extra_forbidden":
-        owner = _model_at(loc)
         options = list(owner.model_fields) if owner else []
         close = difflib.get_close_matches(str(loc[-1]), options, n=1)
         hint = f"; did you mean '{close[0]}'?" if close else f"; allowed: {', '.join(options)}"
         return f"{key}: unknown key{hint}"
     message = error["msg"].removeprefix("Value error, ")
     got = f" (got {error['input']!r})" if "input" in error and error["type"] != "missing" else ""
-    owner = _model_at(loc)
     field = owner.model_fields.get(str(loc[-1])) if owner and loc else None
     expected = f" [{field.description}]" if field and field.description else ""
     return f"{key or '(top level)'}: {message}{got}{expected}"
 
 
-def load_case(path: str | Path, source_dir: Path | None = None) -> Case:
-    """Parse and validate a case file; raises :class:`CaseError` listing every problem.
-
-    Relative geometry paths start at ``source_dir`` (default: the case file's folder; a run
-    directory's copy of a case passes its original folder). The schema's problems are all
-    reported at once; the physical cross-checks
-    (:mod:`perga.case.checks`) need valid fields, so they run, all of them, once the schema passes.
-    """
+def read_case_data(path: str | Path) -> dict[str, Any]:
+    """The TOML data of a case file (:class:`CaseError` naming the file if it cannot be read)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise CaseError([f"{path}: cannot read ({exc.strerror})"]) from None
+    except UnicodeDecodeError:
+        raise CaseError([f"{path}: not a text file (TOML must be UTF-8)"]) from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError([f"{path}: not valid TOML: {exc}"]) from None
+
+
+def overridden(data: dict[str, Any], overrides: Sequence[str], path: str | Path) -> dict[str, Any]:
+    """``data`` with the ``KEY=VALUE`` overrides applied (:mod:`perga.case.overrides`);
+    :class:`CaseError` naming the file and the override if one cannot be applied."""
+    try:
+        return apply_overrides(data, [split_override(o) for o in overrides])
+    except OverrideError as exc:
+        raise CaseError([f"{path}: {exc}"]) from None
+
+
+def validate_case(data: dict[str, Any], path: str | Path, source_dir: Path | None = None) -> Case:
+    """Validate a case's TOML data; problems name ``path``. Raises :class:`CaseError` listing
+    every problem: the schema's all at once, then (they need valid fields) every physical
+    cross-check (:mod:`perga.case.checks`)."""
+    path = Path(path)
     try:
         case = Case.model_validate(data)
     except ValidationError as exc:
         raise CaseError([f"{path}: {_describe(err)}" for err in exc.errors()]) from None
-    case._source_dir = source_dir or path.resolve().parent
+    case.attach_source(source_dir or path.resolve().parent, data)
     problems = check_case(case)
     if problems:
         raise CaseError([f"{path}: {problem}" for problem in problems])
+    return case
+
+
+def load_case(
+    path: str | Path, source_dir: Path | None = None, overrides: Sequence[str] = ()
+) -> Case:
+    """Parse and validate a case file, with ``KEY=VALUE`` ``overrides`` applied first (checked
+    exactly like the file); raises :class:`CaseError` listing every problem.
+
+    Relative geometry paths start at ``source_dir`` (default: the case file's folder; a run
+    directory's copy of a case passes its original folder).
+    """
+    data = read_case_data(path)
+    if overrides:
+        data = overridden(data, overrides, path)
+    case = validate_case(data, path, source_dir)
+    case.attach_source(case.source_dir, data, tuple(overrides))
     return case

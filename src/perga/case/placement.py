@@ -1,6 +1,6 @@
 """Where the granules start: positions (m) and velocities (m/s) from a case's placement.
 
-Pure numpy, no Pymunk: the cross-checks and the scene builder share it.
+Pure numpy, no Pymunk: the cross-checks and the mapping to the system share it.
 """
 
 from __future__ import annotations
@@ -10,7 +10,15 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from perga.case.schema import Case, ExplicitPlacement, RandomPlacement, RingPlacement
+from perga.case.hammer_geometry import hammer_geometry
+from perga.case.parts import hammer_angles
+from perga.case.schema import (
+    Case,
+    ExplicitPlacement,
+    RandomPlacement,
+    RingPlacement,
+    ShotPlacement,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -63,10 +71,49 @@ def random_pack(count: int, radius: float, inner: float, outer: float, seed: int
     return placed
 
 
+def face(case: Case) -> tuple[float, float, float]:
+    """Hammer 0's leading face in the hammer's frame, m: (x_start, x_end, y) of the outline's
+    edge of largest y."""
+    outline = np.asarray(hammer_geometry(case).outline, dtype=float)
+    y = float(outline[:, 1].max())
+    on_face = outline[np.isclose(outline[:, 1], y, rtol=0, atol=1e-9 * np.ptp(outline))]
+    return float(on_face[:, 0].min()), float(on_face[:, 0].max()), y
+
+
+def shot(case: Case, placement: ShotPlacement) -> tuple[FloatArray, FloatArray]:
+    """(position, velocity), (1, 2) each, SI, of a granule fired at hammer 0's leading face
+    (:class:`~perga.case.schema.ShotPlacement`): its path d = −cos θ n + sin θ a (n the face's
+    outward normal, a the hammer's axis, θ the angle of incidence) meets the face at ``along``
+    after ``gap``, and its velocity is the face's there (ω × r) plus ``speed``·d."""
+    x0, x1, y = face(case)
+    along = 0.5 * (x0 + x1) if placement.along is None else placement.along
+    phi = hammer_angles(case)[0]
+    axis_angle = phi + case.hammers.swing_angle
+    hinge = case.hammers.hinge_radius * np.array([math.cos(phi), math.sin(phi)])
+    a = np.array([math.cos(axis_angle), math.sin(axis_angle)])
+    n = np.array([-a[1], a[0]])
+    target = hinge + along * a + y * n
+    d = -math.cos(placement.angle) * n + math.sin(placement.angle) * a
+    centre = target + case.granules.radius * n - d * placement.gap / math.cos(placement.angle)
+    omega = case.rotor.angular_velocity
+    face_velocity = omega * np.array([-target[1], target[0]])
+    return centre[None, :], (face_velocity + placement.speed * d)[None, :]
+
+
+def initial_spins(case: Case) -> FloatArray:
+    """Every granule's angular velocity at t = 0, rad/s: a shot's spin, else 0."""
+    placement = case.granules.placement
+    spin = placement.spin if isinstance(placement, ShotPlacement) else 0.0
+    return np.full(case.granules.count, spin)
+
+
 def initial_state(case: Case) -> tuple[FloatArray, FloatArray]:
     """(positions, velocities), shapes (n, 2), SI, of every granule at t = 0 (at rest unless the
-    explicit placement gives velocities). Raises ValueError if the case has no placement."""
+    explicit placement gives velocities or the granule is a shot). Raises ValueError if the case
+    has no placement."""
     g, placement = case.granules, case.granules.placement
+    if isinstance(placement, ShotPlacement):
+        return shot(case, placement)
     if isinstance(placement, ExplicitPlacement):
         positions = np.array(placement.positions, dtype=float)
         velocities = (

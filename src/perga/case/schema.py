@@ -220,8 +220,35 @@ class RandomPlacement(Strict):
     )
 
 
+class ShotPlacement(Strict):
+    """[granules.placement] kind = "shot": one granule fired at the leading face of hammer 0,
+    the scene of a rebound test (calibration of restitution and friction). The face is the
+    hammer outline's edge of largest y in the hammer's frame (a plate's y = width/2), facing the
+    direction of rotation; the granule's path meets it at ``along`` and its tangential
+    component points outward along the hammer's axis."""
+
+    kind: Literal["shot"]
+    speed: float = Field(gt=0, le=200, description="speed relative to the face, m/s, in (0, 200]")
+    angle: float = Field(
+        0.0, ge=0, le=1.5, description="angle of incidence from the face's normal, rad, in [0, 1.5]"
+    )
+    spin: float = Field(
+        0.0, ge=-1e5, le=1e5, description="initial angular velocity, rad/s (counter-clockwise > 0)"
+    )
+    along: float | None = Field(
+        None,
+        gt=0,
+        description="where the path meets the face, m from the hinge along the "
+        "hammer's axis; default: the middle of the face",
+    )
+    gap: float = Field(
+        0.001, gt=0, le=0.1, description="distance the granule flies before it touches, m"
+    )
+
+
 Placement = Annotated[
-    ExplicitPlacement | RingPlacement | RandomPlacement, Field(discriminator="kind")
+    ExplicitPlacement | RingPlacement | RandomPlacement | ShotPlacement,
+    Field(discriminator="kind"),
 ]
 
 
@@ -496,6 +523,26 @@ class Case(Strict):
     gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")
     paper: PaperStudy | None = Field(None, description="inputs of perga paper-check")
     _source_dir: Path | None = PrivateAttr(None)
+    _data: dict | None = PrivateAttr(None)
+    _overrides: tuple[str, ...] = PrivateAttr(())
+
+    def attach_source(
+        self, folder: Path | None, data: dict | None, overrides: tuple[str, ...] = ()
+    ) -> None:
+        """Record where the case came from: its file's folder, the TOML data it was validated
+        from and the overrides applied to it."""
+        self._source_dir, self._data, self._overrides = folder, data, overrides
+
+    @property
+    def source_data(self) -> dict | None:
+        """The TOML data the case was validated from, overrides applied (None if built in
+        Python)."""
+        return self._data
+
+    @property
+    def overrides(self) -> tuple[str, ...]:
+        """The ``KEY=VALUE`` overrides applied to the file, in order."""
+        return self._overrides
 
     @property
     def source_dir(self) -> Path | None:

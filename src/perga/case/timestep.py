@@ -19,7 +19,7 @@ import numpy as np
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_time_step
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry
-from perga.case.schema import Case, ExplicitPlacement
+from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
 
 MAX_ROTATION_PER_STEP = 0.05
 """Largest rotor turn in one (Pymunk) step, rad (about 3°): hinge and contact geometry stay
@@ -37,6 +37,8 @@ def fastest_relative_speed(case: Case) -> float:
     placement = case.granules.placement
     if isinstance(placement, ExplicitPlacement) and placement.velocities:
         speed += float(np.max(np.hypot(*np.array(placement.velocities, dtype=float).T)))
+    if isinstance(placement, ShotPlacement):
+        speed += placement.speed
     wall = chamber_geometry(case)
     if case.effects.gravity_in_plane is not None and wall is not None:
         speed += math.sqrt(4.0 * case.gravity * wall.outer_radius)

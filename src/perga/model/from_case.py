@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
-from perga.case.placement import initial_state
+from perga.case.placement import initial_spins, initial_state
 from perga.case.schema import Case
 from perga.case.timestep import normal_stiffness, step_plan
 from perga.geometry.polygon import vertex_tuples
@@ -58,6 +58,7 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
 def _granules(case: Case) -> tuple[GranuleSpec, ...]:
     g = case.granules
     positions, velocities = initial_state(case)
+    spins = initial_spins(case)
     return tuple(
         GranuleSpec(
             position=(float(p[0]), float(p[1])),
@@ -66,8 +67,9 @@ def _granules(case: Case) -> tuple[GranuleSpec, ...]:
             mass=case.granule_mass,
             material=g.material,
             rolls=g.rolls,
+            angular_velocity=float(w),
         )
-        for p, v in zip(positions, velocities, strict=True)
+        for p, v, w in zip(positions, velocities, spins, strict=True)
     )
 
 

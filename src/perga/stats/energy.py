@@ -22,6 +22,9 @@ from perga.stats.tables import Run, hammer_mount_angle
 
 FloatArray = NDArray[np.float64]
 
+HEAD_ON = 1e-6
+"""|v_t|/|v_n| below which an impact is head-on and β = −v_t'/v_t is not defined."""
+
 
 @dataclass(frozen=True)
 class ImpactStats:
@@ -34,6 +37,12 @@ class ImpactStats:
     """−v_n before: normal speed of approach relative to the hammer's material point, m/s."""
     restitution: float
     """e = −v_n'/v_n, -."""
+    tangential_restitution: float
+    """β = −v_t'/v_t, - (nan for a head-on impact, |v_t| <= HEAD_ON·|v_n|)."""
+    rebound_angle: float
+    """atan2(v_t', v_n'): the relative velocity after the impact from the normal, rad."""
+    rebound_speed: float
+    """|(v_n', v_t')|, the relative speed after the impact, m/s."""
     reduced_mass: float
     """μ = J/(v_n' − v_n), kg."""
     normal_loss: float
@@ -79,12 +88,18 @@ def granule_energy(run: Run, granule: int, t: float, before: bool = True) -> flo
     )
 
 
+def _ratio(a: float, b: float) -> float:
+    """a/b, nan where b is 0 (a ratio the impact does not define)."""
+    return a / b if b != 0.0 else math.nan
+
+
 def impact_stats(run: Run, index: int) -> ImpactStats:
-    """Statistics of impact ``index`` (row of impacts.csv)."""
+    """Statistics of impact ``index`` (row of impacts.csv); a ratio the impact does not define
+    (a zero approach speed, a hammer at rest) is nan."""
     row = {k: float(v[index]) for k, v in run.impacts.items()}
     vn, vn1 = row["normal_velocity_before"], row["normal_velocity_after"]
     vt, vt1 = row["tangential_velocity_before"], row["tangential_velocity_after"]
-    mu = row["normal_impulse"] / (vn1 - vn)
+    mu = _ratio(row["normal_impulse"], vn1 - vn)
     relative_energy = 0.5 * mu * vn**2
     before = granule_energy(run, int(row["granule"]), row["time"])
     gain, hammer = row["granule_energy_gain"], row["hammer_energy_before"]
@@ -92,17 +107,20 @@ def impact_stats(run: Run, index: int) -> ImpactStats:
         time=row["time"],
         hammer=int(row["hammer"]),
         approach_speed=-vn,
-        restitution=-vn1 / vn,
+        restitution=_ratio(-vn1, vn),
+        tangential_restitution=_ratio(-vt1, vt) if abs(vt) > HEAD_ON * abs(vn) else math.nan,
+        rebound_angle=math.atan2(vt1, vn1),
+        rebound_speed=math.hypot(vn1, vt1),
         reduced_mass=mu,
-        normal_loss=1 - (vn1 / vn) ** 2,
-        hammer_frame_loss=1 - (vn1**2 + vt1**2) / (vn**2 + vt**2),
+        normal_loss=1 - _ratio(vn1, vn) ** 2,
+        hammer_frame_loss=1 - _ratio(vn1**2 + vt1**2, vn**2 + vt**2),
         lab_energy_before=before,
         lab_gain=gain,
         lab_loss=-gain / before if before > 0 else math.nan,
         dissipated=row["dissipated"],
-        transfer=gain / hammer,
-        dissipated_ratio=row["dissipated"] / hammer,
-        relative=gain / relative_energy,
+        transfer=_ratio(gain, hammer),
+        dissipated_ratio=_ratio(row["dissipated"], hammer),
+        relative=_ratio(gain, relative_energy),
     )
 
 

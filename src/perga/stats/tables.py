@@ -75,10 +75,12 @@ def load_run(directory: Path | str) -> Run:
     for needed in ("case.toml", "summary.json"):
         if not (directory / needed).exists():
             raise FileNotFoundError(f"{directory} is not a run directory: no {needed}")
+    summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
+    origin = Path(summary["case"]).parent if summary.get("case") else None
     return Run(
         directory=directory,
-        case=load_case(directory / "case.toml"),
-        summary=json.loads((directory / "summary.json").read_text(encoding="utf-8")),
+        case=load_case(directory / "case.toml", origin if origin and origin.is_dir() else None),
+        summary=summary,
         granules=_optional(directory / "granules.csv"),
         hammers=_optional(directory / "hammers.csv"),
         impacts=_optional(directory / "impacts.csv"),

@@ -1,0 +1,209 @@
+"""Named metrics of a run: numbers computed from a run directory's tables, for sweeps and
+calibration (SI units; each metric's unit in :data:`METRICS`).
+
+A metric is asked for by name, with an argument after a colon where it takes one:
+``first_impact_restitution``, ``granule_speed_after_impact:2``, ``radius_at:0.02``. A metric
+that a run cannot give raises :class:`MetricUnavailableError` with the reason (no impact recorded,
+a table the run did not write, a time past the run's end). Metrics are the statistics of
+:mod:`perga.stats.energy` and :mod:`perga.stats.trajectory`, the functions ``perga compare``
+uses, read for one granule (granule 0 unless said otherwise).
+
+Impact conventions (impacts.csv, :class:`perga.model.records.Impact`): velocities of the
+granule's contact point relative to the hammer's, normal v_n (< 0 approaching) and tangential
+v_t, before and after. The normal restitution is e = −v_n'/v_n; the tangential one
+β = −v_t'/v_t (−1: the tangential velocity kept, as in frictionless sliding; 0: stopped; > 0:
+reversed, as in a sticking contact of a spinning disc); the rebound angle is the angle of the
+relative velocity after the impact from the normal, atan2(v_t', v_n'), rad.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from perga.stats.energy import impact_stats
+from perga.stats.tables import Run
+
+
+class MetricUnavailableError(Exception):
+    """The run cannot give this metric; the message says why."""
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A named metric: its unit, what it is, and how a run gives it (``argument``: what the
+    text after the colon is, or None for a metric without one)."""
+
+    name: str
+    unit: str
+    description: str
+    compute: Callable[[Run, float | None], float]
+    argument: str | None = None
+
+
+def _impact_rows(run: Run, granule: int = 0) -> np.ndarray:
+    if "impacts.csv" not in _tables(run):
+        raise MetricUnavailableError(
+            "the run did not record impacts (output.record lacks 'impacts')"
+        )
+    rows = np.nonzero(run.impacts["granule"] == granule)[0] if run.impacts else np.zeros(0, int)
+    if rows.size == 0:
+        raise MetricUnavailableError(f"granule {granule} made no granule-hammer impact")
+    return rows
+
+
+def _tables(run: Run) -> set[str]:
+    return {p.name for p in run.directory.iterdir() if p.suffix == ".csv"}
+
+
+def _nth_impact(run: Run, n: int) -> int:
+    rows = _impact_rows(run)
+    if not 1 <= n <= rows.size:
+        raise MetricUnavailableError(f"granule 0 made {rows.size} impacts, not {n}")
+    return int(rows[n - 1])
+
+
+def _first(run: Run, field: str, what: str) -> float:
+    """A statistic of granule 0's first impact (:class:`perga.stats.energy.ImpactStats`)."""
+    value = float(getattr(impact_stats(run, _nth_impact(run, 1)), field))
+    if not math.isfinite(value):
+        raise MetricUnavailableError(f"the first impact does not define {what}")
+    return value
+
+
+def first_impact_restitution(run: Run, _: float | None = None) -> float:
+    """e = −v_n'/v_n of granule 0's first impact."""
+    return _first(run, "restitution", "e (no normal approach)")
+
+
+def first_impact_tangential_restitution(run: Run, _: float | None = None) -> float:
+    """β = −v_t'/v_t of granule 0's first impact."""
+    return _first(run, "tangential_restitution", "β (a head-on impact has no tangential motion)")
+
+
+def first_impact_rebound_angle(run: Run, _: float | None = None) -> float:
+    """atan2(v_t', v_n') of granule 0's first impact, rad."""
+    return _first(run, "rebound_angle", "a rebound angle")
+
+
+def first_impact_rebound_speed(run: Run, _: float | None = None) -> float:
+    """|(v_n', v_t')|: the relative speed after granule 0's first impact, m/s."""
+    return _first(run, "rebound_speed", "a rebound speed")
+
+
+def granule_speed_after_impact(run: Run, n: float | None) -> float:
+    """Granule 0's speed in the fixed frame at the first frame after its n-th impact, m/s."""
+    if n is None or n != int(n) or n < 1:
+        raise MetricUnavailableError(
+            "granule_speed_after_impact needs a whole impact number n >= 1"
+        )
+    t = float(run.impacts["time"][_nth_impact(run, int(n))])
+    track = run.track(0)
+    if not track or track["time"].size == 0:
+        raise MetricUnavailableError("the run did not record granules.csv")
+    after = np.nonzero(track["time"] >= t)[0]
+    if after.size == 0:
+        raise MetricUnavailableError(f"no frame after the impact at t = {t:g} s")
+    return float(track["speed"][after[0]])
+
+
+def energy_gain_per_impact(run: Run, _: float | None = None) -> float:
+    """The granules' mean kinetic-energy gain per granule-hammer impact (lab frame), J."""
+    if not run.impacts or run.impacts["time"].size == 0:
+        raise MetricUnavailableError("the run recorded no impact")
+    return float(np.mean(run.impacts["granule_energy_gain"]))
+
+
+def transfer_efficiency(run: Run, _: float | None = None) -> float:
+    """Mean over granule 0's impacts of the granule's energy gain over the hammer's kinetic
+    energy before the impact (:attr:`perga.stats.energy.ImpactStats.transfer`), -."""
+    values = [impact_stats(run, int(i)).transfer for i in _impact_rows(run)]
+    finite = [v for v in values if math.isfinite(v)]
+    if not finite:
+        raise MetricUnavailableError("no impact with a moving hammer")
+    return float(np.mean(finite))
+
+
+def radius_at(run: Run, t: float | None) -> float:
+    """Granule 0's distance from the rotor axis at time t (interpolated between frames), m."""
+    track = run.track(0)
+    if t is None or not track or track["time"].size == 0:
+        raise MetricUnavailableError("radius_at needs a time and granules.csv")
+    if not track["time"][0] <= t <= track["time"][-1]:
+        raise MetricUnavailableError(
+            f"t = {t:g} s is outside the run (0 to {track['time'][-1]:g} s)"
+        )
+    r = np.hypot(track["x"], track["y"])
+    return float(np.interp(t, track["time"], r))
+
+
+def impact_count(run: Run, _: float | None = None) -> float:
+    """The number of granule-hammer impacts the run recorded, -."""
+    if "impacts.csv" not in _tables(run):
+        raise MetricUnavailableError("the run did not record impacts")
+    return float(run.impacts["time"].size if run.impacts else 0)
+
+
+def ledger_closure(run: Run, _: float | None = None) -> float:
+    """The energy ledger's closure at the end of the run (summary.json), -."""
+    energy = run.summary.get("energy") or {}
+    if "closure" not in energy:
+        raise MetricUnavailableError("the run did not track energy (output.record lacks 'energy')")
+    return float(energy["closure"])
+
+
+METRICS: dict[str, Metric] = {
+    m.name: m
+    for m in (
+        Metric("impact_count", "-", "granule-hammer impacts recorded", impact_count),
+        Metric("first_impact_restitution", "-", "e = −v_n'/v_n, first impact of granule 0",
+               first_impact_restitution),
+        Metric("first_impact_tangential_restitution", "-",
+               "β = −v_t'/v_t, first impact of granule 0", first_impact_tangential_restitution),
+        Metric("first_impact_rebound_angle", "rad",
+               "atan2(v_t', v_n'), the rebound from the normal, first impact of granule 0",
+               first_impact_rebound_angle),
+        Metric("first_impact_rebound_speed", "m/s",
+               "relative speed after the first impact of granule 0", first_impact_rebound_speed),
+        Metric("granule_speed_after_impact", "m/s",
+               "speed of granule 0 in the fixed frame after its n-th impact",
+               granule_speed_after_impact, argument="n, the impact number (1, 2, ...)"),
+        Metric("energy_gain_per_impact", "J", "mean granule energy gain per impact",
+               energy_gain_per_impact),
+        Metric("transfer_efficiency", "-",
+               "mean granule gain / hammer energy before, impacts of granule 0",
+               transfer_efficiency),
+        Metric("radius_at", "m", "distance of granule 0 from the axis at time t", radius_at,
+               argument="t, s"),
+        Metric("ledger_closure", "-", "energy-ledger closure at the end", ledger_closure),
+    )
+}  # fmt: skip
+"""Every metric by name."""
+
+
+def parse_metric(name: str) -> tuple[Metric, float | None]:
+    """``NAME`` or ``NAME:ARG`` -> the metric and its argument (ValueError naming the allowed
+    names or the argument it needs)."""
+    base, sep, arg = name.partition(":")
+    metric = METRICS.get(base)
+    if metric is None:
+        raise ValueError(f"unknown metric {name!r}; metrics: {', '.join(METRICS)}")
+    if (metric.argument is None) != (not sep):
+        need = f"{base}:ARG with ARG = {metric.argument}" if metric.argument else base
+        raise ValueError(f"metric {name!r}: write it as {need}")
+    if not sep:
+        return metric, None
+    try:
+        value = float(arg)
+    except ValueError:
+        raise ValueError(f"metric {name!r}: {arg!r} is not a number ({metric.argument})") from None
+    return metric, value
+
+
+def evaluate(run: Run, name: str) -> float:
+    """Metric ``name`` of ``run`` (MetricUnavailableError with the reason if it cannot be given)."""
+    metric, argument = parse_metric(name)
+    return metric.compute(run, argument)

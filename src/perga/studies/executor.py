@@ -1,0 +1,90 @@
+"""Where a study's runs execute: a Dask cluster (``dask.distributed``).
+
+By default a ``LocalCluster`` of worker processes on loopback, one thread each and numba on one
+thread (``NUMBA_NUM_THREADS=1``), as many workers as the machine has free cores (its cores
+less its one-minute load average, at least one). Given a scheduler's address, the runs go to
+that cluster instead (one started with ``dask scheduler`` / ``dask worker``, or by
+``dask-jobqueue`` on SLURM or PBS: start it there and pass its address); given a
+``dask.distributed.Client``, to that client's cluster. The run directories must be on a file
+system the workers and this process share.
+
+:func:`execute` submits every job, hands each finished row to a callback as it arrives and
+returns when all are done. A worker that dies mid-run is the scheduler's concern: its runs go
+to another worker; rows already received are kept. Ctrl-C cancels what has not finished and
+raises KeyboardInterrupt after the rows received so far were handed over.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from distributed import Client, LocalCluster, as_completed
+
+from perga.studies.jobs import Job, failed_row, run_job
+
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+"""Environment of local workers: one thread each, numba's and BLAS's included."""
+
+
+def free_cores() -> int:
+    """The machine's cores less its one-minute load average (rounded), at least 1."""
+    cores = os.cpu_count() or 1
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        load = 0.0
+    return max(1, cores - round(load))
+
+
+@contextlib.contextmanager
+def dask_client(
+    client: Client | None = None, scheduler: str | None = None, workers: int | None = None
+) -> Iterator[Client]:
+    """The client to run on: ``client`` itself, one connected to ``scheduler``, or a new local
+    cluster of ``workers`` processes (default :func:`free_cores`), closed on exit."""
+    if client is not None:
+        yield client
+        return
+    if scheduler is not None:
+        with Client(scheduler) as remote:
+            yield remote
+        return
+    n = workers or free_cores()
+    with (
+        LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            env=WORKER_ENV,
+        ) as cluster,
+        Client(cluster) as local,
+    ):
+        yield local
+
+
+def execute(
+    client: Client,
+    jobs: Sequence[Job],
+    on_row: Callable[[dict[str, Any]], None],
+    function: Callable[[Job], dict[str, Any]] = run_job,
+) -> None:
+    """Run ``jobs`` on ``client``'s cluster, calling ``on_row(row)`` in this process for each as
+    it finishes (module doc for failures and Ctrl-C)."""
+    if not jobs:
+        return
+    futures = client.map(function, list(jobs), pure=False, key=[f"run-{j.key}" for j in jobs])
+    job_of = {f.key: j for f, j in zip(futures, jobs, strict=True)}
+    try:
+        for future in as_completed(futures):
+            if future.status == "error":  # e.g. its workers kept dying: a failed row
+                on_row(failed_row(job_of[future.key], repr(future.exception())))
+            else:
+                on_row(future.result())
+    except BaseException:
+        client.cancel(futures)
+        raise

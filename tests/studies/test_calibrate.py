@@ -1,0 +1,98 @@
+"""perga calibrate: synthetic rebound data made from known restitution and friction plus noise
+are fitted back, the known values inside the reported 95 % intervals; bad data files and fit
+ranges exit 2 naming the file and the field."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from perga.cli import main
+from perga.studies.calibrate import calibrate
+from perga.studies.study_file import Parameter, Study
+from perga.studies.sweep import sweep
+
+ROOT = Path(__file__).resolve().parents[2]
+CASE = ROOT / "cases" / "rebound-test.toml"
+TRUE = {"contacts.granule-hammer.restitution": 0.66, "contacts.granule-hammer.friction": 0.35}
+SD = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution": 0.02}
+FITS = ["contacts.granule-hammer.restitution=0.3:0.95", "contacts.granule-hammer.friction=0.05:0.8"]
+
+
+def _synthetic(path: Path, work: Path, seed: int) -> None:
+    """Data at six angles from runs at TRUE, plus Gaussian noise of SD (seeded)."""
+    parameters = {k: Parameter(values=[v]) for k, v in TRUE.items()}
+    parameters["granules.placement.angle"] = Parameter(values=[0.3, 0.7, 1.0, 1.15, 1.3, 1.4])
+    result = sweep(Study(case=CASE, parameters=parameters, metrics=list(SD)), work, workers=2)
+    rng = np.random.default_rng(seed)
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["granules.placement.angle", *(c for m in SD for c in (m, f"{m}_sd"))])
+        for row in result.rows:
+            cells = [row["granules.placement.angle"]]
+            for m, sd in SD.items():
+                cells += [row[m] + rng.normal(0.0, sd), sd]
+            writer.writerow(cells)
+
+
+def test_least_squares_recovers_known_values(tmp_path: Path) -> None:
+    """Restitution and friction together from rebound restitutions: both known values fall in
+    the 95 % intervals, which are a few standard errors wide (the fit is not vacuous: a
+    noise-free parameter would sit within 1e-3 of its value; here intervals of ~0.01)."""
+    data = tmp_path / "measured.csv"
+    _synthetic(data, tmp_path / "truth", seed=11)
+    out = tmp_path / "fit"
+    fit = calibrate(CASE, data, FITS, out, workers=2)
+    for key, (lo, hi), value in zip(fit.keys, fit.intervals, fit.values, strict=True):
+        assert lo < TRUE[key] < hi, (key, lo, hi)
+        assert hi - lo < 0.05 and abs(value - TRUE[key]) < 0.03
+    record = json.loads((out / "fit.json").read_text())
+    assert record["method"] == "least-squares" and len(record["simulated"]) == 6
+    best = (out / "best.toml").read_text()
+    assert f"restitution = {fit.values[0]!r}" in best
+    for name in ("fit.png", "residuals.png"):
+        assert (out / name).stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_bayes_posterior_covers_known_values(tmp_path: Path) -> None:
+    """emcee from the least-squares optimum: the 95 % posterior intervals hold the known values."""
+    data = tmp_path / "measured.csv"
+    _synthetic(data, tmp_path / "truth", seed=12)
+    fit = calibrate(CASE, data, FITS, tmp_path / "fit", method="bayes", steps=40, workers=2)
+    for key, (lo, hi) in zip(fit.keys, fit.intervals, strict=True):
+        assert lo < TRUE[key] < hi, (key, lo, hi)
+    assert (tmp_path / "fit" / "posterior.png").exists()
+
+
+@pytest.mark.parametrize(
+    ("table", "fits", "message"),
+    [
+        ("rotor.rpmm,first_impact_restitution\n1,0.7\n", FITS, "rotor.rpmm: unknown key"),
+        ("granules.placement.angle,bogus_metric\n0.3,0.7\n", FITS, "no metric column"),
+        ("granules.placement.angle,first_impact_restitution\n0.3,high\n", FITS, "not a number"),
+        ("granules.placement.angle,first_impact_restitution,first_impact_restitution_sd\n"
+         "0.3,0.7,0\n", FITS, "first_impact_restitution_sd: must be > 0"),
+        ("granules.placement.angle,first_impact_restitution\n9,0.7\n", FITS,
+         "granules.placement.angle: Input should be less than or equal to 1.5"),
+        ("granules.placement.angle,first_impact_restitution\n0.3,0.7\n",
+         ["contacts.granule-hammer.restitution=0.9:0.9"], "the range needs LO < HI"),
+        ("granules.placement.angle,first_impact_restitution\n0.3,0.7\n",
+         ["contacts.granule-hammer.restitution=0.95:0.3"], "the range needs LO < HI"),
+        ("granules.placement.angle,first_impact_restitution\n0.3,0.7\n",
+         ["restitution"], "expected KEY=LO:HI"),
+    ],
+)  # fmt: skip
+def test_bad_data_and_fits_exit_2(tmp_path: Path, capsys, table: str, fits, message: str) -> None:
+    data = tmp_path / "data.csv"
+    data.write_text(table)
+    args = ["calibrate", str(CASE), "--data", str(data), "-o", str(tmp_path / "o")]
+    for f in fits:
+        args += ["--fit", f]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert message in err, err
