@@ -76,7 +76,7 @@ def test_interrupt_keeps_what_was_written(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted"
     rows = read(out / "granules.csv")
-    assert rows and all(len(r) == 8 for r in rows)
+    assert rows and all(len(r) == 10 for r in rows)  # time, id, x, y, vx, vy, ω, speed, r, m
     assert 0.01 <= summary["simulated_time"] < 0.02
 
 
@@ -134,7 +134,7 @@ def test_real_ctrl_c_leaves_a_readable_run(tmp_path):
     assert summary["status"] == "interrupted"
     assert 0 < summary["simulated_time"] < 0.5
     rows = read(out / "granules.csv")
-    assert rows and all(len(r) == 8 and None not in r.values() for r in rows)
+    assert rows and all(len(r) == 10 and None not in r.values() for r in rows)
 
 
 def test_non_finite_state_stops_with_a_diagnostic(tmp_path):

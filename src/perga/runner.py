@@ -54,6 +54,9 @@ class RunSummary:
     hammers: int = 0
     impacts: int = 0
     frames: int = 0
+    population: dict[str, int] = field(default_factory=dict)
+    """Granules: fed (those at t = 0 included), released from cells, departed through the
+    outlet, broken (drawn), removed broken, present at the end."""
     energy: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
@@ -87,10 +90,11 @@ def check_granules(frame: Frame, chamber_radius: float, wall_thickness: float, d
     (farther from the axis than the wall's farthest inner point, ``chamber_radius``, plus its
     thickness); ``dt`` (s) is named in the remedy."""
     p, v = frame.granules.positions, frame.granules.velocities
+    ids = frame.granules.ids
     bad = np.nonzero(~np.all(np.isfinite(np.hstack((p, v))), axis=1))[0]
     if bad.size:
         raise RunStoppedError(
-            f"step {frame.step} (t = {frame.time:.6g} s): granule {bad[0]} has a non-finite "
+            f"step {frame.step} (t = {frame.time:.6g} s): granule {ids[bad[0]]} has a non-finite "
             f"position or velocity; reduce solver.dt (now {dt:.3g} s)"
         )
     r = np.hypot(p[:, 0], p[:, 1])
@@ -98,10 +102,21 @@ def check_granules(frame: Frame, chamber_radius: float, wall_thickness: float, d
     if out.size:
         i = out[0]
         raise RunStoppedError(
-            f"step {frame.step} (t = {frame.time:.6g} s): granule {i} left the chamber "
+            f"step {frame.step} (t = {frame.time:.6g} s): granule {ids[i]} left the chamber "
             f"(r = {r[i]:.4g} m > wall at {chamber_radius:g} m + {wall_thickness:g} m): it "
             f"tunnelled through the wall; reduce solver.dt (now {dt:.3g} s) or increase "
             "chamber.wall_thickness"
+        )
+
+
+def check_population(frame: Frame) -> None:
+    """Raise RunStoppedError unless every granule fed is present, departed or removed broken."""
+    present = len(frame.granules.ids)
+    if frame.fed != present + frame.departed + frame.removed_broken:
+        raise RunStoppedError(
+            f"step {frame.step} (t = {frame.time:.6g} s): granules not conserved: {frame.fed} "
+            f"fed != {present} present + {frame.departed} departed + {frame.removed_broken} "
+            "removed broken (a defect of perga: please report it with the case file)"
         )
 
 
@@ -165,8 +180,9 @@ def run_case(
         def write_frame() -> None:
             frame = sim.frame(contacts=contacts)
             check_granules(frame, outer, thickness, sim.dt)
+            check_population(frame)
             for recorder in recorders:
-                recorder.record(frame, sim.impacts)
+                recorder.record(frame, sim.events())
             summary.frames += 1
 
         frames.due(0.0)
@@ -213,6 +229,17 @@ def _finish(
         summary.steps, summary.simulated_time = sim.steps, sim.time
         summary.steps_per_second = sim.steps / wall if wall > 0 else 0.0
         summary.impacts = len(sim.impacts)
+        process = sim.spec.process
+        if process.feed or process.outlet or process.damage or sim.spec.has_bonds:
+            frame = sim.frame(contacts=False)
+            summary.population = {
+                "fed": frame.fed,
+                "released": frame.released,
+                "departed": frame.departed,
+                "broken": 0 if sim.damage is None else len(sim.damage.broken),
+                "removed_broken": frame.removed_broken,
+                "present": len(frame.granules.ids),
+            }
         if sim.meter is not None:
             summary.energy = asdict(sim.energy())
             closure = summary.energy.get("closure", 0.0)

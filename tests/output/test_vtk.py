@@ -27,7 +27,14 @@ from perga.engine import units as u
 from perga.model import ContactSpec
 from perga.model.from_case import scene_spec
 from perga.model.spec import SceneSpec
-from perga.output.vtk import CHAMBER_SEGMENTS, ROTOR_SIDES, PvdSeries, VtkRecorder, _grid
+from perga.output.vtk import (
+    CHAMBER_SEGMENTS,
+    ROTOR_SIDES,
+    SCRATCH_COLUMNS,
+    PvdSeries,
+    VtkRecorder,
+    _grid,
+)
 from perga.runner import prepare_directory, run_case
 
 CASES = Path(__file__).parents[2] / "cases"
@@ -160,7 +167,7 @@ def simulate(directory: Path, kind: str) -> Run:
             for _ in range(STEPS_PER_FRAME[kind]):
                 sim.step()
         frames.append(snapshot(sim))
-        recorder.record(sim.frame(), sim.impacts)
+        recorder.record(sim.frame(), sim.events())
         pvds.append(read_pvd(directory / "vtk" / "granules.pvd"))
         assert read_pvd(directory / "vtk" / "machine.pvd") == [
             (t, f.replace("granules", "machine")) for t, f in pvds[-1]
@@ -329,7 +336,7 @@ def test_no_impacts_leaves_an_empty_readable_file(tmp_path: Path) -> None:
     spec = scene_spec(load_case(CASES / "single-granule.toml"))
     sim = Simulation(spec)
     recorder = VtkRecorder(tmp_path, sim.spec)
-    recorder.record(sim.frame(), sim.impacts)
+    recorder.record(sim.frame(), sim.events())
     recorder.close()
     recorder.close()  # idempotent
     impacts = pv.read(tmp_path / "vtk" / "impacts.vtu")
@@ -389,15 +396,15 @@ def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
     n = len(spec.granules)
     recorder = VtkRecorder(tmp_path, sim.spec)
     for _ in range(5):
-        recorder.record(sim.frame(), sim.impacts)
+        recorder.record(sim.frame(), sim.events())
     held = held_bytes(recorder)
     for _ in range(60):
-        recorder.record(sim.frame(), sim.impacts)
+        recorder.record(sim.frame(), sim.events())
     tracemalloc.start()
     gc.collect()
     before = tracemalloc.get_traced_memory()[0]
     for _ in range(60):
-        recorder.record(sim.frame(), sim.impacts)
+        recorder.record(sim.frame(), sim.events())
     gc.collect()
     grown = tracemalloc.get_traced_memory()[0] - before
     tracemalloc.stop()
@@ -405,7 +412,7 @@ def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
     assert held < 100 * n * 8  # a few per-granule arrays
     assert grown < 0.05 * 60 * n * 3 * 8, grown
     scratch = tmp_path / "vtk" / ".trajectories.f8"
-    assert scratch.stat().st_size == 125 * (1 + 3 * n) * 8
+    assert scratch.stat().st_size == 125 * n * SCRATCH_COLUMNS * 8
     recorder.close()
     assert not scratch.exists()
     trajectories = pv.read(tmp_path / "vtk" / "trajectories.vtu")

@@ -72,7 +72,7 @@ def run3d(tmp_path_factory: pytest.TempPathFactory) -> Run3D:
         for _ in range(STEPS_PER_FRAME if k else 0):
             sim.step()
         frames.append(snapshot(sim))
-        recorder.record(sim.frame(), sim.impacts)
+        recorder.record(sim.frame(), sim.events())
     recorder.close()
     return Run3D(sim, directory / "vtk", frames, drawing)
 

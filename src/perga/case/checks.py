@@ -15,11 +15,27 @@ import numpy as np
 
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
 from perga.case.hammer_geometry import hammer_geometry
-from perga.case.parts import chamber_geometry, hinge_misses, hinge_positions, rotor_geometry
+from perga.case.obstacles import initial_obstacles
+from perga.case.parts import (
+    ChamberGeometry,
+    chamber_geometry,
+    hinge_misses,
+    hinge_positions,
+    rotor_geometry,
+)
 from perga.case.placement import face, initial_state
-from perga.case.schema import Case, ExplicitPlacement, RandomPlacement, ShotPlacement
+from perga.case.schema import (
+    Case,
+    CombPlacement,
+    ExplicitPlacement,
+    Outlet,
+    RandomPlacement,
+    ShotPlacement,
+)
+from perga.case.sizes import initial_radii, radius_range
 from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
-from perga.geometry.wall import wall_pieces
+from perga.geometry.clearance import Obstacles, overlapping_pairs
+from perga.geometry.wall import circumscribed, wall_pieces
 
 MIN_STEPS_PER_CONTACT = 10
 """Fewest steps per soft contact accepted (symplectic Euler is stable to about t_c/5; e drifts
@@ -165,23 +181,50 @@ def _granules(case: Case) -> list[str]:
                     f"random pack needs <= {MAX_RANDOM_PACKING:.0%}: fewer granules or a wider ring"
                 )
         return problems
-    positions, _ = initial_state(case)
-    distance = np.hypot(positions[:, 0], positions[:, 1])
-    for i in np.nonzero(distance > limit)[0]:
+    if isinstance(placement, CombPlacement) and placement.pitch < 2 * radius_range(case)[1]:
         problems.append(
-            f"granules.placement: granule {i} at {distance[i]:.4g} m from the axis overlaps the "
-            f"wall (centres must be within the wall's inner radius − radius = {limit:.4g} m)"
+            f"granules.placement.pitch: cells {placement.pitch:g} m apart cannot hold granules "
+            f"of radius up to {radius_range(case)[1]:g} m: needs >= {2 * radius_range(case)[1]:g}"
         )
-    if len(positions) > 1:
-        gaps = np.hypot(*(positions[:, None, :] - positions[None, :, :]).transpose(2, 0, 1))
-        i, j = np.nonzero(np.triu(gaps < 2 * g.radius, k=1))
+        return problems
+    if isinstance(placement, CombPlacement) and g.count != placement.rows * placement.columns:
+        problems.append(
+            f"granules.count: a comb of {placement.rows} × {placement.columns} cells holds "
+            f"{placement.rows * placement.columns} granules (got {g.count})"
+        )
+        return problems
+    positions, _ = initial_state(case)
+    return problems + _overlaps(case, positions, initial_radii(case))
+
+
+def _overlaps(case: Case, positions: np.ndarray, radii: np.ndarray) -> list[str]:
+    """Granules overlapping the wall, a hammer or each other at t = 0 (a k-d tree: never all
+    pairs), at most five of each named."""
+    obstacles = initial_obstacles(case)
+    hammers = Obstacles(obstacles.polygons)
+    walls = Obstacles(container=obstacles.container, container_radius=obstacles.container_radius)
+    problems = []
+    for what, free in (
+        ("the wall", walls.clear(positions, radii)),
+        ("a hammer", hammers.clear(positions, radii)),
+    ):
+        bad = np.flatnonzero(~free)
         problems += [
-            f"granules.placement: granules {a} and {b} overlap (centres {gaps[a, b]:.4g} m apart, "
-            f"need >= 2·radius = {2 * g.radius:g} m)"
-            for a, b in zip(i[:5], j[:5], strict=True)
+            f"granules.placement: granule {i} at ({positions[i, 0]:.4g}, {positions[i, 1]:.4g}) m "
+            f"overlaps {what} (radius {radii[i]:.4g} m)"
+            for i in bad[:5]
         ]
-        if len(i) > 5:
-            problems.append(f"granules.placement: ... and {len(i) - 5} more overlapping pairs")
+        if len(bad) > 5:
+            problems.append(f"granules.placement: ... and {len(bad) - 5} more overlap {what}")
+    pairs = overlapping_pairs(positions, radii)
+    problems += [
+        f"granules.placement: granules {a} and {b} overlap (centres "
+        f"{np.hypot(*(positions[a] - positions[b])):.4g} m apart, need >= "
+        f"{radii[a] + radii[b]:g} m)"
+        for a, b in pairs[:5]
+    ]
+    if len(pairs) > 5:
+        problems.append(f"granules.placement: ... and {len(pairs) - 5} more overlapping pairs")
     return problems
 
 
@@ -237,6 +280,12 @@ def _contact_model(case: Case) -> list[str]:
         problems.append(
             "granules.rolls: must be true with soft contacts (a soft granule is a disc with "
             "I = m r²/2; sliding points need contact_model.kind = 'rigid')"
+        )
+    if cm.kind == "hertz" and case.granules.size is not None:
+        problems.append(
+            "granules.size: Hertz contacts take one granule radius per material (their "
+            "stiffness k√R* is tabled per material pair); a size distribution needs "
+            "contact_model.kind = 'linear'"
         )
     tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
     for i, contact in enumerate(case.contacts):
@@ -296,6 +345,94 @@ def check_case(case: Case) -> list[str]:
     problems = _hammers(case)
     if any(p.startswith("hammers.shape:") for p in problems):
         return problems  # the later checks need the hammer's geometry
-    for check in (_granules, _effects, _contact_model, _time_step):
+    for check in (_granules, _process, _effects, _contact_model, _time_step):
         problems += check(case)
     return problems
+
+
+def _process(case: Case) -> list[str]:
+    """Feed, outlet and damage: the region inside the chamber, an outlet granules can reach,
+    the material parameters they need."""
+    problems = []
+    material = case.materials.get(case.granules.material)
+    if case.damage is not None and (material is None or material.breakage is None):
+        problems.append(
+            f"damage: needs [materials.{case.granules.material}.breakage] (f_mat, w_min)"
+        )
+    wall = chamber_geometry(case)
+    feed = case.feed
+    if feed is not None:
+        if feed.stop is not None and feed.stop <= feed.start:
+            problems.append(f"feed.stop: must be after feed.start = {feed.start:g} s")
+        if feed.kind == "comb" and not isinstance(case.granules.placement, CombPlacement):
+            problems.append(
+                "feed.kind: 'comb' feeds pieces shaped like granules.placement, "
+                "which must then be a comb"
+            )
+        if wall is not None:
+            r = feed.region
+            c, s_ = math.cos(r.angle), math.sin(r.angle)
+            corners = np.array(
+                [
+                    (sx * r.size[0] / 2, sy * r.size[1] / 2)
+                    for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+                ]
+            )
+            corners = np.column_stack(
+                (
+                    r.centre[0] + c * corners[:, 0] - s_ * corners[:, 1],
+                    r.centre[1] + s_ * corners[:, 0] + c * corners[:, 1],
+                )
+            )
+            container = Obstacles(
+                container=None if wall.outline is None else np.asarray(wall.outline),
+                container_radius=wall.inner_radius if wall.outline is None else None,
+            )
+            if not container.clear(corners, np.zeros(4)).all():
+                problems.append(
+                    "feed.region: the rectangle reaches outside the chamber (corners at "
+                    + ", ".join(f"({x:.4g}, {y:.4g})" for x, y in corners)
+                    + " m)"
+                )
+    outlet = case.outlet
+    if outlet is not None and wall is not None:
+        problems += _outlet(outlet, wall)
+    return problems
+
+
+def _outlet(outlet: Outlet, wall: ChamberGeometry) -> list[str]:
+    """An outlet granules can reach: a radius inside the wall's farthest point, a line or
+    screen that the wall's inner outline crosses (within the screen's width)."""
+    if outlet.kind == "radius":
+        assert outlet.radius is not None
+        if outlet.radius >= wall.outer_radius:
+            return [
+                f"outlet.radius: {outlet.radius:g} m is beyond the wall's farthest point "
+                f"({wall.outer_radius:g} m): no granule can reach it"
+            ]
+        return []
+    assert outlet.point is not None and outlet.normal is not None
+    inner = (
+        np.asarray(wall.outline)
+        if wall.outline is not None
+        else circumscribed(wall.inner_radius, 256)
+    )
+    n = np.asarray(outlet.normal) / math.hypot(*outlet.normal)
+    d = inner - np.asarray(outlet.point)
+    side = d @ n
+    along = d @ np.array([-n[1], n[0]])
+    half = 0.5 * (outlet.width if outlet.width is not None else math.inf)
+    a, b = side, np.roll(side, -1)
+    crossing = (a <= 0) != (b <= 0)
+    t = np.where(crossing, a / np.where(crossing, a - b, 1.0), 0.0)
+    where = along + t * (np.roll(along, -1) - along)
+    cuts = crossing & (np.abs(where) <= half)
+    touches = (np.abs(side) < 1e-9) & (np.abs(along) <= half)
+    if not (cuts.any() or touches.any()):
+        what = "screen" if outlet.kind == "screen" else "line"
+        return [
+            f"outlet: the {what} through ({outlet.point[0]:g}, {outlet.point[1]:g}) m does "
+            f"not cut the chamber's wall{' within its width' if outlet.kind == 'screen' else ''}"
+            ": no granule can reach it"
+        ]
+    return []

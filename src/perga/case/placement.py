@@ -11,14 +11,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from perga.case.hammer_geometry import hammer_geometry
+from perga.case.obstacles import initial_obstacles
 from perga.case.parts import hammer_angles
 from perga.case.schema import (
     Case,
+    CombPlacement,
     ExplicitPlacement,
     RandomPlacement,
     RingPlacement,
     ShotPlacement,
 )
+from perga.case.sizes import initial_radii
+from perga.geometry.clearance import Obstacles
 
 FloatArray = NDArray[np.float64]
 
@@ -36,14 +40,18 @@ def ring(count: int, radius: float, phase: float) -> FloatArray:
     return radius * np.column_stack((np.cos(angles), np.sin(angles)))
 
 
-def random_pack(count: int, radius: float, inner: float, outer: float, seed: int) -> FloatArray:
-    """Non-overlapping discs of ``radius`` (m) with centres uniform in the annulus
-    inner ≤ r ≤ outer (m), by random sequential addition with a cell grid (cells of 2·radius).
+def random_pack(
+    radii: FloatArray, inner: float, outer: float, seed: int, obstacles: Obstacles | None = None
+) -> FloatArray:
+    """Non-overlapping discs of ``radii`` (m) with centres uniform in the annulus
+    inner ≤ r ≤ outer (m), clear of the ``obstacles`` (hammers, the chamber), by random
+    sequential addition with a cell grid (cells of twice the largest radius).
 
     Deterministic for a given seed. Raises :class:`PlacementError` when it cannot place them all.
     """
     rng = np.random.default_rng(seed)
-    cell = 2 * radius
+    count = len(radii)
+    cell = 2 * float(np.max(radii)) if count else 1.0
     grid: dict[tuple[int, int], list[int]] = {}
     placed = np.empty((count, 2))
     n, attempts = 0, 0
@@ -51,24 +59,40 @@ def random_pack(count: int, radius: float, inner: float, outer: float, seed: int
         attempts += 1
         if attempts > MAX_ATTEMPTS_PER_GRANULE * count:
             raise PlacementError(
-                f"random placement fitted only {n} of {count} granules of radius {radius:g} m "
-                f"in the annulus [{inner:g}, {outer:g}] m: use fewer granules or a wider annulus"
+                f"random placement fitted only {n} of {count} granules (radii up to "
+                f"{cell / 2:g} m) in the annulus [{inner:g}, {outer:g}] m clear of the hammers "
+                "and the wall: use fewer granules or a wider annulus"
             )
         r = math.sqrt(rng.uniform(inner**2, outer**2))
         theta = rng.uniform(0, 2 * math.pi)
         x, y = r * math.cos(theta), r * math.sin(theta)
         ci, cj = math.floor(x / cell), math.floor(y / cell)
+        rn = radii[n]
         if any(
-            (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < cell * cell
+            (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < (rn + radii[k]) ** 2
             for di in (-1, 0, 1)
             for dj in (-1, 0, 1)
             for k in grid.get((ci + di, cj + dj), ())
         ):
             continue
+        if obstacles is not None and not obstacles.clear([(x, y)], [rn])[0]:
+            continue
         placed[n] = x, y
         grid.setdefault((ci, cj), []).append(n)
         n += 1
     return placed
+
+
+def comb(placement: CombPlacement) -> FloatArray:
+    """The cell centres of a comb piece, (rows·columns, 2), m: rows of cells ``pitch`` apart,
+    rows √3/2·pitch apart and every other one shifted by pitch/2, centred and turned."""
+    j, i = np.divmod(np.arange(placement.rows * placement.columns), placement.columns)
+    x = (i + 0.5 * (j % 2)) * placement.pitch
+    y = j * placement.pitch * math.sqrt(3.0) / 2.0
+    x, y = x - 0.5 * (x.min() + x.max()), y - 0.5 * (y.min() + y.max())
+    c, s = math.cos(placement.angle), math.sin(placement.angle)
+    cx, cy = placement.centre
+    return np.column_stack((cx + c * x - s * y, cy + s * x + c * y))
 
 
 def face(case: Case) -> tuple[float, float, float]:
@@ -100,6 +124,14 @@ def shot(case: Case, placement: ShotPlacement) -> tuple[FloatArray, FloatArray]:
     return centre[None, :], (face_velocity + placement.speed * d)[None, :]
 
 
+def held(case: Case) -> bool:
+    """Whether the granules start held in comb cells: a comb whose material has a
+    detachment force."""
+    placement = case.granules.placement
+    material = case.materials.get(case.granules.material)
+    return isinstance(placement, CombPlacement) and bool(material and material.detachment_force)
+
+
 def initial_spins(case: Case) -> FloatArray:
     """Every granule's angular velocity at t = 0, rad/s: a shot's spin, else 0."""
     placement = case.granules.placement
@@ -124,13 +156,15 @@ def initial_state(case: Case) -> tuple[FloatArray, FloatArray]:
         return positions, velocities
     if isinstance(placement, RingPlacement):
         positions = ring(g.count, placement.radius, placement.phase)
+    elif isinstance(placement, CombPlacement):
+        positions = comb(placement)
     elif isinstance(placement, RandomPlacement):
         positions = random_pack(
-            g.count,
-            g.radius,
+            initial_radii(case),
             placement.inner_radius,
             placement.outer_radius,
             case.solver.seed if placement.seed is None else placement.seed,
+            initial_obstacles(case),
         )
     else:
         raise ValueError("granules.placement is missing: a simulation needs start positions")

@@ -246,17 +246,96 @@ class ShotPlacement(Strict):
     )
 
 
+class CombPlacement(Strict):
+    """[granules.placement] kind = "comb": the granules sit in the cells of a comb piece, a
+    hexagonal array of cells (rows of ``columns`` cells, every other row shifted by half a
+    pitch) centred at ``centre`` and turned by ``angle``; a granule of a material with a
+    ``detachment_force`` is held in its cell until the force on it exceeds that."""
+
+    kind: Literal["comb"]
+    centre: tuple[float, float] = Field(description="centre of the comb piece, m")
+    rows: int = Field(ge=1, le=1000, description="rows of cells, in [1, 1000]")
+    columns: int = Field(ge=1, le=1000, description="cells per row, in [1, 1000]")
+    pitch: float = Field(
+        gt=0,
+        le=0.05,
+        description="distance between neighbouring cells' centres, m: a worker "
+        "cell's width across flats plus its wall, 5.2-5.4 mm in bee comb",
+    )
+    angle: float = Field(0.0, description="turn of the piece, rad (rows along +x at 0)")
+
+
 Placement = Annotated[
-    ExplicitPlacement | RingPlacement | RandomPlacement | ShotPlacement,
+    ExplicitPlacement | RingPlacement | RandomPlacement | ShotPlacement | CombPlacement,
     Field(discriminator="kind"),
 ]
+
+
+class SizeDistribution(Strict):
+    """[granules.size]: granule radii drawn from a distribution (seeded by ``solver.seed``),
+    by number or by mass. ``uniform`` between ``low`` and ``high``; ``normal`` with ``mean``
+    and ``sd``, ``lognormal`` with ``median`` and ``sigma`` (of ln r), both cut to
+    [``low``, ``high``]; ``table``: the ``radii`` with their ``fractions`` (summing to 1). By
+    mass, the fractions (or the density) are of mass: a granule of radius r weighs
+    ρπr²·thickness, so its number weight is the mass weight over r²."""
+
+    kind: Literal["uniform", "normal", "lognormal", "table"]
+    basis: Literal["number", "mass"] = Field("number", description="fractions of number or mass")
+    low: float | None = Field(None, gt=0, le=0.05, description="smallest radius, m")
+    high: float | None = Field(None, gt=0, le=0.05, description="largest radius, m")
+    mean: float | None = Field(None, gt=0, le=0.05, description="normal: mean radius, m")
+    sd: float | None = Field(None, gt=0, le=0.05, description="normal: standard deviation, m")
+    median: float | None = Field(None, gt=0, le=0.05, description="lognormal: median radius, m")
+    sigma: float | None = Field(None, gt=0, le=3, description="lognormal: sd of ln r, in (0, 3]")
+    radii: list[float] | None = Field(None, min_length=1, description="table: radii, m")
+    fractions: list[float] | None = Field(None, min_length=1, description="table: fractions")
+
+    @model_validator(mode="after")
+    def _parameters(self) -> SizeDistribution:
+        need = {
+            "uniform": ("low", "high"),
+            "normal": ("mean", "sd", "low", "high"),
+            "lognormal": ("median", "sigma", "low", "high"),
+            "table": ("radii", "fractions"),
+        }[self.kind]
+        missing = [n for n in need if getattr(self, n) is None]
+        if missing:
+            raise ValueError(f"kind '{self.kind}' needs {', '.join(missing)}")
+        extra = [
+            n
+            for n in ("low", "high", "mean", "sd", "median", "sigma", "radii", "fractions")
+            if n not in need and getattr(self, n) is not None
+        ]
+        if extra:
+            raise ValueError(f"kind '{self.kind}' takes no {', '.join(extra)}")
+        if self.low is not None and self.high is not None and not self.low < self.high:
+            raise ValueError(f"needs low < high (got {self.low} and {self.high} m)")
+        if self.kind == "table":
+            assert self.radii is not None and self.fractions is not None
+            if len(self.radii) != len(self.fractions):
+                raise ValueError("radii and fractions need one entry each per size")
+            if any(not 0 < r <= 0.05 for r in self.radii):
+                raise ValueError("radii must be in (0, 0.05] m")
+            if any(f < 0 for f in self.fractions) or abs(sum(self.fractions) - 1.0) > 1e-9:
+                raise ValueError(
+                    f"fractions must be >= 0 and sum to 1 (sum {sum(self.fractions):.12g})"
+                )
+        return self
 
 
 class Granules(Strict):
     """[granules]: bee-bread granules (discs in the plane)."""
 
     count: int = Field(1, ge=1, le=1_000_000, description="number of granules, in [1, 1e6]")
-    radius: float = Field(gt=0, le=0.05, description="disc radius, m, in (0, 0.05]")
+    radius: float = Field(
+        gt=0,
+        le=0.05,
+        description="disc radius, m, in (0, 0.05]; with size: the largest "
+        "radius a time step and the checks plan for",
+    )
+    size: SizeDistribution | None = Field(
+        None, description="radii from a distribution (needs thickness); default: all radius"
+    )
     mass: float | None = Field(
         None, gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]; or thickness"
     )
@@ -279,13 +358,32 @@ class Granules(Strict):
     def _mass_or_thickness(self) -> Granules:
         if (self.mass is None) == (self.thickness is None):
             raise ValueError("give exactly one of mass (kg) or thickness (m)")
+        if self.size is not None and self.thickness is None:
+            raise ValueError("size: granules of several sizes need thickness (m), not mass")
         return self
+
+
+class Breakage(Strict):
+    """[materials.NAME.breakage]: the Vogel & Peukert (2003) breakage master curve,
+    S = 1 − exp(−f_mat · x · k · (W − W_min)) for an impact of mass-specific energy W > W_min,
+    x the granule's size (its diameter) and k impacts so far."""
+
+    f_mat: float = Field(gt=0, le=100, description="material strength parameter, kg/(J·m)")
+    w_min: float = Field(ge=0, le=1e4, description="threshold mass-specific energy, J/kg")
 
 
 class Material(Strict):
     """[materials.NAME]."""
 
     density: float = Field(gt=0, le=30000, description="density, kg/m³, in (0, 30000]")
+    detachment_force: float | None = Field(
+        None,
+        gt=0,
+        le=1e4,
+        description="force that pulls a granule of this material out of its "
+        "comb cell, N, in (0, 1e4]; none: granules are not held",
+    )
+    breakage: Breakage | None = Field(None, description="breakage parameters (damage)")
 
 
 class ContactPair(Strict):
@@ -485,9 +583,12 @@ class Output(Strict):
 
     directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
     every: float = Field(1e-3, gt=0, description="recording interval in simulated time, s, > 0")
-    record: tuple[Literal["granules", "hammers", "impacts", "energy", "vtk"], ...] = Field(
+    record: tuple[
+        Literal["granules", "hammers", "impacts", "energy", "releases", "outflow", "vtk"], ...
+    ] = Field(
         ("granules", "hammers", "impacts", "energy", "vtk"),
-        description="what to write: CSV tables (granules, hammers, impacts, energy) and 'vtk' "
+        description="what to write: CSV tables (granules, hammers, impacts, energy, releases: "
+        "granules pulled from their cells, outflow: granules gone through the outlet) and 'vtk' "
         "(ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
     )
     vtk_3d: bool = Field(
@@ -505,6 +606,74 @@ class Output(Strict):
         return self
 
 
+class Region(Strict):
+    """A rectangle: ``centre`` (m), ``size`` (width, height, m), turned by ``angle`` (rad)."""
+
+    centre: tuple[float, float]
+    size: tuple[float, float] = Field(description="width and height, m, each > 0")
+    angle: float = 0.0
+
+    @model_validator(mode="after")
+    def _positive(self) -> Region:
+        if not (self.size[0] > 0 and self.size[1] > 0):
+            raise ValueError(f"size must be two lengths > 0 m (got {list(self.size)})")
+        return self
+
+
+class Feed(Strict):
+    """[feed]: granules inserted over time into ``region`` (each where it overlaps nothing:
+    granules, hammers, the wall), free (kind "granules") or as comb pieces (kind "comb", the
+    shape of ``granules.placement``, a comb, whose cells hold their granules)."""
+
+    kind: Literal["granules", "comb"] = Field(
+        "granules", description="free granules or comb pieces"
+    )
+    rate: float = Field(gt=0, le=1e7, description="granules (or pieces) per s, or kg/s by mass")
+    basis: Literal["number", "mass"] = Field("number", description="rate of number or of mass")
+    start: float = Field(0.0, ge=0, description="first insertion, s")
+    stop: float | None = Field(None, gt=0, description="no insertion after, s; default: never")
+    total: int | None = Field(None, ge=1, le=10_000_000, description="granules (pieces) in all")
+    region: Region = Field(description="where they are put")
+    velocity: tuple[float, float] = Field((0.0, 0.0), description="their velocity, m/s")
+
+
+class Outlet(Strict):
+    """[outlet]: where granules leave the chamber (are counted and taken out). ``radius``:
+    farther than ``radius`` from the axis; ``line``: past the line through ``point`` whose
+    ``normal`` points out; ``screen``: the line's segment of ``width`` about ``point``, passed
+    only by granules narrower than ``aperture``."""
+
+    kind: Literal["radius", "line", "screen"]
+    radius: float | None = Field(None, gt=0, le=5, description="radius kind, m")
+    point: tuple[float, float] | None = Field(None, description="line, screen: a point on it, m")
+    normal: tuple[float, float] | None = Field(None, description="line, screen: outward normal")
+    width: float | None = Field(None, gt=0, le=10, description="screen: its width, m")
+    aperture: float | None = Field(None, gt=0, le=0.1, description="screen: mesh opening, m")
+
+    @model_validator(mode="after")
+    def _parameters(self) -> Outlet:
+        need = {
+            "radius": ("radius",),
+            "line": ("point", "normal"),
+            "screen": ("point", "normal", "width", "aperture"),
+        }[self.kind]
+        missing = [n for n in need if getattr(self, n) is None]
+        if missing:
+            raise ValueError(f"kind '{self.kind}' needs {', '.join(missing)}")
+        if self.normal is not None and math.hypot(*self.normal) == 0:
+            raise ValueError("normal must not be (0, 0)")
+        return self
+
+
+class Damage(Strict):
+    """[damage]: each granule-hammer impact may break the granule (its material's
+    ``breakage``); broken granules are marked, or taken out. Whether one breaks is drawn with
+    the impact's breakage probability (seeded by ``solver.seed``); its expected survival is
+    recorded either way."""
+
+    action: Literal["mark", "remove"] = Field("mark", description="what happens to a broken one")
+
+
 class Case(Strict):
     """A perga case file."""
 
@@ -516,6 +685,9 @@ class Case(Strict):
     materials: dict[str, Material] = Field(description="materials by name: [materials.NAME]")
     contacts: list[ContactPair] = Field(min_length=1)
     chamber: Chamber | None = Field(None, description="the wall (needed by perga run)")
+    feed: Feed | None = Field(None, description="granules inserted over time")
+    outlet: Outlet | None = Field(None, description="where granules leave")
+    damage: Damage | None = Field(None, description="breakage of granules by impacts")
     effects: Effects = Field(default_factory=Effects)
     contact_model: ContactModel = Field(default_factory=ContactModel)
     solver: Solver = Field(default_factory=Solver)

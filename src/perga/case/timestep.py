@@ -20,6 +20,7 @@ from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_t
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry
 from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
+from perga.case.sizes import masses, radius_range
 
 MAX_ROTATION_PER_STEP = 0.05
 """Largest rotor turn in one (Pymunk) step, rad (about 3°): hinge and contact geometry stay
@@ -67,8 +68,10 @@ def hammer_effective_mass(case: Case) -> float:
 
 
 def _pairs(case: Case) -> list[tuple[str, float, float]]:
-    """(name, reduced mass kg, effective radius m) of each soft contact kind the scene has."""
-    m, r = case.granule_mass, case.granules.radius
+    """(name, reduced mass kg, effective radius m) of each soft contact kind the scene has, for
+    its smallest granule (the shortest contacts)."""
+    r = radius_range(case)[0]
+    m = float(masses(case, np.array([r]))[0]) if case.granules.size else case.granule_mass
     hammer = hammer_effective_mass(case)
     pairs = [("granule-hammer", m if math.isinf(hammer) else m * hammer / (m + hammer), r)]
     if case.chamber is not None:
@@ -151,7 +154,7 @@ def step_plan(case: Case) -> StepPlan:
     cm, solver = case.contact_model, case.solver
     t_c = min(contact_durations(case).values()) if cm.soft else math.inf
     tunnelling = tunnelling_time_step(
-        case.granules.radius, thinnest_obstacle(case), fastest_relative_speed(case)
+        radius_range(case)[0], thinnest_obstacle(case), fastest_relative_speed(case)
     )
     substeps = cm.granule_substeps if cm.soft else 1
     rotation = MAX_ROTATION_PER_STEP / case.rotor.angular_velocity / substeps

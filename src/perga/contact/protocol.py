@@ -12,6 +12,9 @@ simulation calls, in this order (:mod:`perga.engine.simulation` has the whole st
 4. :meth:`ContactModel.after_machine_step`, which returns the angular impulse about the axis
    that the contacts put on the rotor-driven bodies (for the drive's work in the ledger).
 
+Between steps the process (a feed, an outlet, damage) may add and remove granules; each has a
+persistent number (its id), which impacts, releases and frames name.
+
 Everything is in SI at this interface except the kicks' arrays and that angular impulse, which
 are in Chipmunk's internal units (:mod:`perga.engine.units`), as the effects and the meter
 compute in them.
@@ -19,13 +22,15 @@ compute in them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from perga.model.records import Impact, LedgerTerms
+from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.spec import GranuleSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -39,6 +44,10 @@ class GranuleKinematics(Protocol):
         """Number of granules."""
         ...
 
+    def constants(self) -> tuple[FloatArray, FloatArray]:
+        """The granules' masses (kg) and radii (m), rows as the velocities'."""
+        ...
+
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
         """Velocities (n, 2) and, if asked for, positions (n, 2) (else None): fresh arrays."""
         ...
@@ -50,15 +59,22 @@ class GranuleKinematics(Protocol):
 
 @dataclass(frozen=True)
 class GranuleState:
-    """One consistent read of all granules, SI, rows in the spec's order (fresh arrays).
+    """One consistent read of the granules present, SI, one row each (fresh arrays).
 
     positions: centres, (n, 2), m; velocities: centre velocities, (n, 2), m/s;
-    angular_velocities: (n,), rad/s.
+    angular_velocities: (n,), rad/s; ids: persistent numbers (n,); radii (n,), m; masses (n,),
+    kg; inertia (n,): moments about the centre, kg·m² (0 for a sliding point); held (n,): held
+    in a comb cell.
     """
 
     positions: FloatArray
     velocities: FloatArray
     angular_velocities: FloatArray
+    ids: NDArray[np.int64]
+    radii: FloatArray
+    masses: FloatArray
+    inertia: FloatArray
+    held: NDArray[np.bool_]
 
 
 class ContactModel(Protocol):
@@ -83,6 +99,18 @@ class ContactModel(Protocol):
         """Work after Chipmunk's step that ended at ``time`` (s); returns the angular impulse
         about the rotor axis the contacts put on the rotor-driven bodies during the step,
         internal units (0 when energy is not tracked)."""
+        ...
+
+    releases: list[Release]
+    """Granules pulled out of their comb cells so far."""
+
+    def add_granules(self, granules: Sequence[GranuleSpec], ids: Sequence[int]) -> None:
+        """Add these granules, numbered ``ids``, between steps."""
+        ...
+
+    def remove_granules(self, ids: Sequence[int]) -> None:
+        """Take the granules numbered ``ids`` out between steps, booking the energy they take
+        (the ledger's outflow)."""
         ...
 
     def energy_terms(self) -> LedgerTerms:

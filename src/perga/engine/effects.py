@@ -26,7 +26,7 @@ granules in numpy.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, NamedTuple
 
 import numpy as np
 import pymunk
@@ -77,10 +77,12 @@ class Kick(Effect):
         self.needs_positions = False
         """Whether :meth:`kick` needs the granules' positions."""
 
-    def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
+    def kick(
+        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
+    ) -> FloatArray:
         """The granules' velocities after one step of ``dt`` of this effect (internal units;
-        rows in spec order; ``positions`` given if :attr:`needs_positions`). Counts the energy
-        and must not change its arguments."""
+        ``positions`` given if :attr:`needs_positions`; ``granules`` their masses and radii,
+        SI). Counts the energy and must not change its arguments."""
         raise NotImplementedError
 
 
@@ -101,27 +103,21 @@ class KickRunner:
         if self.granules.count == 0:
             return
         velocities, positions = self.granules.read_internal(positions=self._positions)
-        self.granules.write_internal_velocities(run_kicks(self.kicks, velocities, positions, dt))
+        granules = Granules(*self.granules.constants())
+        for effect in self.kicks:
+            velocities = effect.kick(velocities, positions, granules, dt)
+        self.granules.write_internal_velocities(velocities)
 
 
-def run_kicks(
-    kicks: list[Kick], velocities: FloatArray, positions: FloatArray | None, dt: float
-) -> FloatArray:
-    """The granules' velocities after every kick in ``kicks``, in order (internal units)."""
-    for effect in kicks:
-        velocities = effect.kick(velocities, positions, dt)
-    return velocities
+class Granules(NamedTuple):
+    """What a kick needs of the granules besides their motion: masses (kg), radii (m)."""
+
+    masses: FloatArray
+    radii: FloatArray
 
 
 def _speeds(v: FloatArray) -> FloatArray:
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1])
-
-
-def _granule_masses(machine: Machine) -> FloatArray:
-    """Granule masses, internal units, spec order (the granules' bodies hold the same values)."""
-    return np.array(
-        [u.to_internal(g.mass, u.MASS) for g in machine.spec.granules], dtype=np.float64
-    )
 
 
 _REGISTRY: dict[str, Callable[[Machine, Any], Effect]] = {}
@@ -246,9 +242,10 @@ class FloorFriction(Kick):
         self._deceleration = u.to_internal(spec.friction * spec.gravity, u.ACCELERATION)
         self._rotor = machine.rotor if spec.floor == "corotating" else None
         self.needs_positions = self._rotor is not None
-        self._mass = _granule_masses(machine)
 
-    def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
+    def kick(
+        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
+    ) -> FloatArray:
         if self._rotor is None:
             floor = np.zeros_like(velocities)
             relative = velocities
@@ -265,7 +262,7 @@ class FloorFriction(Kick):
         scale = np.where(moving, 1.0 - np.minimum(self._deceleration * dt, speed) / safe, 1.0)
         after = relative * scale[:, None]
         new = np.where(moving[:, None], floor + after, velocities)
-        m = np.where(moving, self._mass, 0.0)
+        m = np.where(moving, granules.masses / u.MASS, 0.0)
         self._removed += float(0.5 * np.sum(m * (speed * speed - np.sum(after * after, axis=1))))
         if self._rotor is not None:
             self._supplied += float(np.sum(m * np.sum((after - relative) * floor, axis=1)))
@@ -283,30 +280,26 @@ class AirDrag(Kick):
 
     def __init__(self, machine: Machine, spec: AirDragSpec) -> None:
         super().__init__()
-        self._k = np.array(
-            [
-                u.to_internal(
-                    0.5
-                    * spec.air_density
-                    * spec.drag_coefficient
-                    * 2
-                    * g.radius
-                    * spec.thickness
-                    / g.mass,
-                    1.0 / u.LENGTH,
-                )
-                for g in machine.spec.granules
-            ],
-            dtype=np.float64,
-        )
-        self._mass = _granule_masses(machine)
+        self._spec = spec
 
-    def kick(self, velocities: FloatArray, positions: FloatArray | None, dt: float) -> FloatArray:
+    def kick(
+        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
+    ) -> FloatArray:
+        s = self._spec
+        k = (
+            0.5
+            * s.air_density
+            * s.drag_coefficient
+            * 2
+            * granules.radii
+            * s.thickness
+            / granules.masses
+        ) / (1.0 / u.LENGTH)
         speed = _speeds(velocities)
         moving = speed > 0.0
-        after = speed / (1.0 + self._k * speed * dt)
+        after = speed / (1.0 + k * speed * dt)
         ratio = np.where(moving, after / np.where(moving, speed, 1.0), 1.0)
-        m = np.where(moving, self._mass, 0.0)
+        m = np.where(moving, granules.masses / u.MASS, 0.0)
         self._removed += float(0.5 * np.sum(m * (speed * speed - after * after)))
         return velocities * ratio[:, None]
 

@@ -5,12 +5,12 @@ the effects' per-step kicks). For one body the exact change of kinetic energy ov
 Σ J·v̄ over those impulses, v̄ the mean of the velocities at the application point before and
 after the step. The ledger uses that identity term by term. Its parts:
 
-* :class:`EnergyMeter` (here): the Pymunk space's dynamic bodies (the machine, and the
-  granules where the contact model puts them in the space): their kinetic energy and gravity's
-  work on them, the drive's work and what the effects removed.
+* :class:`EnergyMeter` (here): the machine's dynamic bodies (a driven rotor, hinged or free
+  hammers): their kinetic energy and gravity's work on them, the drive's work and what the
+  effects removed.
 * the contact model's own terms (:meth:`perga.contact.protocol.ContactModel.energy_terms`):
-  the energy its contacts dissipated, and for granules outside Pymunk their kinetic and elastic
-  energy and gravity's work on them.
+  the granules' kinetic (and, soft, elastic) energy, gravity's work on them, what granules fed
+  in brought and granules taken out took, and the energy its contacts dissipated.
 
 The terms:
 
@@ -57,8 +57,8 @@ def _centre(body: pymunk.Body) -> pymunk.Vec2d:
 
 
 class EnergyMeter:
-    """Measures the ledger's terms of a machine's Pymunk space from the moment it is built
-    (module doc): build it after the contact model has added its bodies.
+    """Measures the ledger's terms of a machine's bodies from the moment it is built (module
+    doc).
 
     Call :meth:`before_step` and :meth:`after_step` around every ``space.step``.
     """
@@ -67,9 +67,10 @@ class EnergyMeter:
         self._effects = machine.effects
         self._space = machine.space
         self._rotor = machine.rotor
-        self._bodies = [b for b in machine.space.bodies if b.body_type == pymunk.Body.DYNAMIC]
         hinged = [j.b for j in machine.hinges]
         self._balanced = ([machine.rotor] if machine.driven else []) + hinged
+        machine_bodies = dict.fromkeys([machine.rotor, *machine.hammer_bodies])
+        self._bodies = [b for b in machine_bodies if b.body_type == pymunk.Body.DYNAMIC]
         self._needs_balance = bool(self._balanced or machine.rotor.shapes)
         self._kinetics0 = [_kinetic(b) for b in self._bodies]
         self._centres0 = [_centre(b) for b in self._bodies]
@@ -100,7 +101,7 @@ class EnergyMeter:
         self._drive += 0.5 * (self._omega0 + self._rotor.angular_velocity) * moment
 
     def terms(self) -> LedgerTerms:
-        """The cumulative terms of the space's bodies and the effects now, in J."""
+        """The cumulative terms of the machine's bodies and the effects now, in J."""
         gravity = self._space.gravity
         kinetics = [_kinetic(b) for b in self._bodies]
         terms = {"friction": 0.0, "drag": 0.0, "drive": 0.0, "contact": 0.0}

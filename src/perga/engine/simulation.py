@@ -24,6 +24,9 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
    rotor-driven bodies, which the meter needs for the drive's work.
 6. The meter balances the rotor-driven bodies' angular momentum (:mod:`perga.engine.energy`).
 7. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
+8. The process, if the system has one (:mod:`perga.engine.process`): the step's new impacts
+   get their specific energy (and with damage their breakage); broken granules to be removed
+   are removed, granules at the outlet leave, the feed puts in what is due.
 
 Because positions move before velocities are updated (step 4), the state after a step is
 (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler, first
@@ -34,6 +37,7 @@ and the hammers they load form one kick-drift scheme (docs/architecture.md).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,9 +48,11 @@ from perga.engine import units as u
 from perga.engine.effects import KickRunner
 from perga.engine.energy import EnergyMeter
 from perga.engine.machine import Machine, build_machine
+from perga.engine.process import Damage, Feed, Outlet
+from perga.geometry.clearance import Obstacles
 from perga.model.frame import Frame, GranuleFrame, frozen
-from perga.model.records import EnergyLedger, Impact
-from perga.model.spec import SceneSpec
+from perga.model.records import EnergyLedger, Events, Impact
+from perga.model.spec import GranuleSpec, SceneSpec
 
 FloatArray = NDArray[np.float64]
 
@@ -77,17 +83,33 @@ class Simulation:
         self.kicks = kicks if kicks else None
         """The effects' kicks on the granules (None when the spec lists none)."""
         self.meter = EnergyMeter(self.machine) if track_energy else None
-        self._constants: GranuleFrame | None = None
+        process = spec.process
+        self.feed = Feed(process.feed) if process.feed else None
+        self.outlet = Outlet(process.outlet) if process.outlet else None
+        self.damage = Damage(process.damage) if process.damage else None
+        self.impacts: list[Impact] = []
+        """Every impact so far, with its specific energy (and breakage, with damage)."""
+        self.impact_counts: dict[int, int] = {}
+        """Granule-hammer impacts of each granule so far, by id."""
+        self.entered: dict[int, float] = {}
+        """When each granule was fed or released from its cell, s, by id (absent: t = 0)."""
+        self.fed = len(spec.granules)
+        """Granules put in so far, those at t = 0 included."""
+        self.removed_broken = 0
+        self._seen = 0
+        self._releases_seen = 0
+        self._next_id = len(spec.granules)
+        self._material_names = tuple(sorted(spec.granule_materials))
+        self._material_of = [self._material_names.index(g.material) for g in spec.granules]
+        """Each granule's material (an index into the names), by id."""
+        self._outlines = [np.asarray(h.outline, dtype=float) for h in spec.hammers]
+        if self.feed is not None:
+            self.feed.run(self, 0.0)
 
     @property
     def time(self) -> float:
         """Simulated time, s."""
         return self.steps * self.dt
-
-    @property
-    def impacts(self) -> list[Impact]:
-        """Impacts recorded so far (empty if recording is off)."""
-        return self.contacts.impacts
 
     def step(self) -> None:
         """Advance by one machine step dt."""
@@ -102,6 +124,68 @@ class Simulation:
         if self.meter is not None:
             self.meter.after_step(self._dt_internal, moment)
         self.steps += 1
+        self._process(end)
+
+    def _process(self, time: float) -> None:
+        """Step 8 of the order (module doc)."""
+        new = self.contacts.impacts[self._seen :]
+        if new:
+            self._seen += len(new)
+            sizes = dict(zip(*self._ids_and_sizes(), strict=True)) if self.damage else {}
+            for impact in new:
+                impact = replace(impact, specific_energy=0.5 * impact.normal_velocity_before**2)
+                if self.damage is not None:
+                    impact = self.damage.annotate(impact, sizes.get(impact.granule, math.nan))
+                self.impacts.append(impact)
+                self.impact_counts[impact.granule] = self.impact_counts.get(impact.granule, 0) + 1
+        releases = self.contacts.releases
+        for release in releases[self._releases_seen :]:
+            self.entered[release.granule] = release.time
+        self._releases_seen = len(releases)
+        if self.damage is not None:
+            self.removed_broken += self.damage.run(self, time)
+        if self.outlet is not None:
+            self.outlet.run(self, time)
+        if self.feed is not None:
+            self.feed.run(self, time)
+
+    def _ids_and_sizes(self) -> tuple[NDArray[np.int64], FloatArray]:
+        state = self.contacts.granule_state()
+        return state.ids, 2.0 * state.radii
+
+    # --- the process's access to the granules ----------------------------------------------
+
+    def add_granules(self, granules: list[GranuleSpec], time: float) -> None:
+        """Put ``granules`` in now (numbered on from the last id), entered at ``time`` (s)."""
+        ids = list(range(self._next_id, self._next_id + len(granules)))
+        self._next_id += len(granules)
+        self.contacts.add_granules(granules, ids)
+        self._material_of += [self._material_names.index(g.material) for g in granules]
+        for id_ in ids:
+            self.entered[id_] = time
+        self.fed += len(granules)
+
+    def remove_granules(self, ids: NDArray[np.int64]) -> None:
+        """Take the granules numbered ``ids`` out."""
+        self.contacts.remove_granules([int(i) for i in ids])
+
+    def obstacles(self) -> Obstacles:
+        """The hammers as posed now and the chamber: where a granule may not be put."""
+        hammers = self.machine.frame(self.dt).posed(self._outlines)
+        chamber = self.spec.chamber
+        if chamber is None:
+            return Obstacles(hammers)
+        if chamber.outline is None:
+            return Obstacles(hammers, container_radius=chamber.radius)
+        return Obstacles(hammers, container=chamber.inner_outline())
+
+    def survival_of(self, id_: int) -> float:
+        """Granule ``id_``'s expected survival (1 without damage or impacts)."""
+        return 1.0 if self.damage is None else self.damage.survival.get(id_, 1.0)
+
+    def broken_of(self, id_: int) -> bool:
+        """Whether granule ``id_`` broke (drawn; False without damage)."""
+        return self.damage is not None and id_ in self.damage.broken
 
     def run(self, duration: float) -> int:
         """Advance by ``duration`` (s), rounded to a whole number of steps; returns the count."""
@@ -124,17 +208,22 @@ class Simulation:
         unless ``contacts`` is False)."""
         state = self.contacts.granule_state()
         counts = self.contacts.contact_counts() if contacts else None
-        constants = self._granule_constants()
+        material_of = np.asarray(self._material_of, dtype=np.int32)
+        survival = np.array([self.survival_of(int(i)) for i in state.ids], dtype=float)
+        broken = np.array([self.broken_of(int(i)) for i in state.ids], dtype=bool)
         granules = GranuleFrame(
-            ids=constants.ids,
-            radii=constants.radii,
-            masses=constants.masses,
-            inertia=constants.inertia,
-            materials=constants.materials,
-            material_names=constants.material_names,
+            ids=frozen(state.ids),
+            radii=frozen(state.radii),
+            masses=frozen(state.masses),
+            inertia=frozen(state.inertia),
+            materials=frozen(material_of[state.ids]),
+            material_names=self._material_names,
             positions=frozen(state.positions),
             velocities=frozen(state.velocities),
             angular_velocities=frozen(state.angular_velocities),
+            held=frozen(state.held),
+            survival=frozen(survival),
+            broken=frozen(broken),
             contacts=None if counts is None else frozen(counts[0]),
             overlap_max=None if counts is None else frozen(counts[1]),
         )
@@ -144,30 +233,25 @@ class Simulation:
             granules=granules,
             machine=self.machine.frame(self.dt),
             energy=None if self.meter is None else self.energy(),
+            fed=self.fed,
+            departed=0 if self.outlet is None else len(self.outlet.departures),
+            removed_broken=self.removed_broken,
+            released=len(self.contacts.releases),
         )
 
-    def _granule_constants(self) -> GranuleFrame:
-        """The granules' constant arrays (built once; their state arrays left empty)."""
-        if self._constants is None:
-            granules = self.spec.granules
-            names = tuple(sorted({g.material for g in granules}))
-            empty = frozen(np.zeros((0, 2)))
-            self._constants = GranuleFrame(
-                ids=frozen(np.arange(len(granules), dtype=np.int64)),
-                radii=frozen(np.array([g.radius for g in granules], dtype=float)),
-                masses=frozen(np.array([g.mass for g in granules], dtype=float)),
-                inertia=frozen(np.array([g.moment if g.rolls else 0.0 for g in granules])),
-                materials=frozen(
-                    np.array([names.index(g.material) for g in granules], dtype=np.int32)
-                ),
-                material_names=names,
-                positions=empty,
-                velocities=empty,
-                angular_velocities=frozen(np.zeros(0)),
-            )
-        return self._constants
-
     # --- state in SI ---------------------------------------------------------------------------
+
+    def events(self) -> Events:
+        """The impacts, releases and departures so far (views of the growing lists)."""
+        return Events(
+            self.impacts,
+            self.contacts.releases,
+            () if self.outlet is None else self.outlet.departures,
+        )
+
+    def granule_ids(self) -> NDArray[np.int64]:
+        """The ids of the granules present, (n,) array (rows of the other accessors)."""
+        return self.contacts.granule_state().ids
 
     def granule_positions(self) -> FloatArray:
         """Granule centres, (n, 2) array, m."""

@@ -46,6 +46,9 @@ class GranuleFrame:
     positions: FloatArray
     velocities: FloatArray
     angular_velocities: FloatArray
+    held: NDArray[np.bool_]
+    survival: FloatArray
+    broken: NDArray[np.bool_]
     contacts: NDArray[np.int32] | None = None
     overlap_max: FloatArray | None = None
 
@@ -95,10 +98,16 @@ class MachineFrame:
 @dataclass(frozen=True)
 class Frame:
     """The simulation at time ``time`` (s) after ``step`` machine steps: its granules, its
-    machine and, where the run measures it, the energy ledger since t = 0."""
+    machine and, where the run measures it, the energy ledger since t = 0; the process's
+    counts: granules fed in all (those at t = 0 included), gone through the outlet, removed
+    broken, released from their cells."""
 
     time: float
     step: int
     granules: GranuleFrame
     machine: MachineFrame
     energy: EnergyLedger | None = None
+    fed: int = 0
+    departed: int = 0
+    removed_broken: int = 0
+    released: int = 0

@@ -12,12 +12,18 @@ thicknesses for the 3-D view of the output (:class:`~perga.model.spec.DrawingSpe
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
-from perga.case.placement import initial_spins, initial_state
-from perga.case.schema import Case
+from perga.case.placement import comb, held, initial_spins, initial_state
+from perga.case.schema import Case, CombPlacement
+from perga.case.sizes import initial_radii, masses, mean_mass, quantile_table
 from perga.case.timestep import normal_stiffness, step_plan
 from perga.geometry.polygon import vertex_tuples
+from perga.model.process import DamageSpec, FeedSpec, OutletSpec, ProcessSpec, Sizes
 from perga.model.spec import (
     AirDragSpec,
     ChamberSpec,
@@ -59,17 +65,21 @@ def _granules(case: Case) -> tuple[GranuleSpec, ...]:
     g = case.granules
     positions, velocities = initial_state(case)
     spins = initial_spins(case)
+    radii = initial_radii(case)
+    weights = masses(case, radii)
+    bond = case.materials[g.material].detachment_force if held(case) else None
     return tuple(
         GranuleSpec(
             position=(float(p[0]), float(p[1])),
             velocity=(float(v[0]), float(v[1])),
-            radius=g.radius,
-            mass=case.granule_mass,
+            radius=float(r),
+            mass=float(m),
             material=g.material,
             rolls=g.rolls,
             angular_velocity=float(w),
+            bond_force=bond,
         )
-        for p, v, w in zip(positions, velocities, spins, strict=True)
+        for p, v, w, r, m in zip(positions, velocities, spins, radii, weights, strict=True)
     )
 
 
@@ -139,6 +149,63 @@ def _drawing(case: Case) -> DrawingSpec | None:
     )
 
 
+def _feed(case: Case) -> FeedSpec | None:
+    feed, g = case.feed, case.granules
+    if feed is None:
+        return None
+    radii, levels, discrete = quantile_table(case)
+    if feed.kind == "comb":
+        assert isinstance(g.placement, CombPlacement)
+        piece = comb(g.placement) - np.asarray(g.placement.centre)
+        bond = case.materials[g.material].detachment_force
+    else:
+        piece, bond = np.zeros((1, 2)), None
+    rate = feed.rate if feed.basis == "number" else feed.rate / (mean_mass(case) * len(piece))
+    return FeedSpec(
+        rate=rate,
+        start=feed.start,
+        stop=math.inf if feed.stop is None else feed.stop,
+        total=feed.total,
+        region=(feed.region.centre, feed.region.size, feed.region.angle),
+        velocity=feed.velocity,
+        piece=vertex_tuples(piece),
+        sizes=Sizes(tuple(map(float, radii)), tuple(map(float, levels)), discrete),
+        areal_density=case.granule_density * case.granule_thickness,
+        mass=g.mass if g.size is None else None,
+        material=g.material,
+        rolls=g.rolls,
+        bond_force=bond,
+        seed=int(np.random.SeedSequence(case.solver.seed, spawn_key=(2,)).generate_state(1)[0]),
+    )
+
+
+def _process(case: Case) -> ProcessSpec:
+    outlet = case.outlet
+    damage = case.damage
+    breakage = case.materials[case.granules.material].breakage
+    return ProcessSpec(
+        feed=_feed(case),
+        outlet=None
+        if outlet is None
+        else OutletSpec(
+            outlet.kind,
+            radius=outlet.radius if outlet.radius is not None else math.inf,
+            point=outlet.point or (0.0, 0.0),
+            normal=outlet.normal or (0.0, 1.0),
+            width=outlet.width if outlet.width is not None else math.inf,
+            aperture=outlet.aperture if outlet.aperture is not None else math.inf,
+        ),
+        damage=None
+        if damage is None or breakage is None
+        else DamageSpec(
+            breakage.f_mat,
+            breakage.w_min,
+            damage.action,
+            int(np.random.SeedSequence(case.solver.seed, spawn_key=(3,)).generate_state(1)[0]),
+        ),
+    )
+
+
 def scene_spec(case: Case) -> SceneSpec:
     """The engine's description of a validated case (raises ValueError without a placement or
     a chamber: a simulation needs both)."""
@@ -171,4 +238,5 @@ def scene_spec(case: Case) -> SceneSpec:
         contact_model=_contact_model(case),
         drawing=_drawing(case),
         plan=plan,
+        process=_process(case),
     )

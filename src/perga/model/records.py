@@ -4,6 +4,8 @@ recorders and the statistics."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 TINY = 1e-30
@@ -34,8 +36,8 @@ class Impact:
     hammer_energy_before: the hammer's kinetic energy ½Mv_c² + ½I_cΩ² at the impact's start, J;
     granule_velocity_before: the granule's velocity in the fixed frame before the impact, m/s;
     hammer_swing_angle_before, hammer_angular_velocity_before: the hammer's α (rad) and absolute
-    angular velocity Ω (rad/s) at the impact's start. Each contact model says what "before" and
-    "after" are for its contacts (:mod:`perga.contact.rigid.impacts`,
+    angular velocity Ω (rad/s) at the impact's start; granule is the granule's id. Each contact
+    model says what "before" and "after" are for its contacts (:mod:`perga.contact.rigid.impacts`,
     :mod:`perga.contact.soft.impacts`).
     """
 
@@ -55,6 +57,49 @@ class Impact:
     granule_velocity_before: tuple[float, float]
     hammer_swing_angle_before: float
     hammer_angular_velocity_before: float
+    specific_energy: float = math.nan
+    """W = ½v_n² of the approach, J/kg (the simulation fills it in)."""
+    breakage_probability: float = math.nan
+    """The chance this impact broke the granule, 1 − exp(−f_mat·x·(W − W_min)⁺), with damage."""
+    survival: float = math.nan
+    """The granule's expected survival after this impact, with damage."""
+
+
+@dataclass(frozen=True)
+class Release:
+    """A granule pulled out of its comb cell: at ``time`` (s, the end of the machine step),
+    granule ``granule`` (its id), by a bond reaction of ``force`` (N) above its threshold."""
+
+    time: float
+    granule: int
+    force: float
+
+
+@dataclass(frozen=True)
+class Departure:
+    """A granule that left through the outlet at ``time`` (s): its id, radius (m), mass (kg),
+    speed (m/s), impacts with hammers (-), expected survival (-, 1 without damage), whether
+    it broke (drawn), and its time in the chamber since it was fed or released (s)."""
+
+    time: float
+    granule: int
+    radius: float
+    mass: float
+    speed: float
+    impacts: int
+    survival: float
+    broken: bool
+    residence_time: float
+
+
+@dataclass(frozen=True)
+class Events:
+    """Everything a run has recorded so far, in order: granule-hammer impacts, granules released
+    from their cells, granules gone through the outlet."""
+
+    impacts: Sequence[Impact] = ()
+    releases: Sequence[Release] = ()
+    departures: Sequence[Departure] = ()
 
 
 @dataclass(frozen=True)
@@ -78,11 +123,16 @@ class EnergyLedger:
     drag: float
     """Energy removed by air drag."""
     closure: float
-    """(drive + gravity − ΔKE − Δelastic − contact − friction − drag) / energy scale."""
+    """(drive + gravity + inflow − outflow − ΔKE − Δelastic − contact − friction − drag) /
+    energy scale."""
     elastic: float = 0.0
     """Energy stored in soft contacts now (0 with rigid contacts)."""
     elastic_initial: float = 0.0
     """Energy stored in soft contacts at t = 0."""
+    inflow: float = 0.0
+    """Energy brought in by granules fed into the chamber (their kinetic energy)."""
+    outflow: float = 0.0
+    """Energy taken out by granules removed (kinetic and stored elastic energy)."""
 
 
 @dataclass(frozen=True)
@@ -101,6 +151,8 @@ class LedgerTerms:
     drag: float = 0.0
     elastic: float = 0.0
     elastic_initial: float = 0.0
+    inflow: float = 0.0
+    outflow: float = 0.0
 
     def __add__(self, other: LedgerTerms) -> LedgerTerms:
         return LedgerTerms(
@@ -114,12 +166,22 @@ class LedgerTerms:
         residual = (
             self.drive_work
             + self.gravity_work
+            + self.inflow
+            - self.outflow
             - change
             - self.contact_dissipation
             - self.friction
             - self.drag
         )
-        scale = max(abs(self.drive_work), abs(change), abs(self.gravity_work), self.moved, TINY)
+        scale = max(
+            abs(self.drive_work),
+            abs(change),
+            abs(self.gravity_work),
+            self.moved,
+            self.inflow,
+            self.outflow,
+            TINY,
+        )
         return EnergyLedger(
             kinetic=self.kinetic,
             kinetic_initial=self.kinetic_initial,
@@ -131,4 +193,6 @@ class LedgerTerms:
             closure=residual / scale,
             elastic=self.elastic,
             elastic_initial=self.elastic_initial,
+            inflow=self.inflow,
+            outflow=self.outflow,
         )

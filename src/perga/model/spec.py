@@ -23,6 +23,7 @@ from perga.analytic.common import STANDARD_GRAVITY
 from perga.geometry.convex import decompose
 from perga.geometry.polygon import clean, counter_clockwise, self_intersection, vertex_tuples
 from perga.geometry.wall import circumscribed, wall_pieces
+from perga.model.process import ProcessSpec
 
 if TYPE_CHECKING:
     from perga.case.timestep import StepPlan
@@ -178,7 +179,8 @@ class GranuleSpec:
     rolls: True gives a disc's moment m r²/2 (it can roll); False gives moment = inf, a sliding
     point that never changes its angular velocity; angular_velocity: initial, rad/s (a sliding
     granule on a rotor face should start with the rotor's ω so that its surface does not slip
-    against the face, design §5).
+    against the face, design §5); bond_force: held at its position (a comb's cell) until the
+    force the bond must supply exceeds this, N; None: free.
     """
 
     position: Vec2
@@ -188,9 +190,12 @@ class GranuleSpec:
     material: str
     rolls: bool = True
     angular_velocity: float = 0.0
+    bond_force: float | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []
+        if self.bond_force is not None and not self.bond_force > 0:
+            problems.append(f"bond_force must be > 0 N or None (got {self.bond_force})")
         _finite_vec(problems, "position", self.position)
         _finite_vec(problems, "velocity", self.velocity)
         _positive(problems, "radius", self.radius, "m")
@@ -441,7 +446,8 @@ class SceneSpec:
     effects: optional physics; contact_model: :class:`RigidContactSpec` (Pymunk's impulses) or
     :class:`SoftContactSpec`; drawing: sizes for the 3-D view of the output
     (:class:`DrawingSpec`), or None for none; plan: the time-step plan the steps came from
-    (:class:`perga.case.timestep.StepPlan`), None for a spec made by hand. Every material pair
+    (:class:`perga.case.timestep.StepPlan`), None for a spec made by hand; process: feed, outlet
+    and damage (:mod:`perga.model.process`), each None unless the system has it. Every material pair
     that can touch must be in ``contacts`` exactly once. Hammers never collide with each other,
     with the rotor or with the chamber wall.
     """
@@ -459,6 +465,7 @@ class SceneSpec:
     contact_model: RigidContactSpec | SoftContactSpec = RigidContactSpec()
     drawing: DrawingSpec | None = None
     plan: StepPlan | None = None
+    process: ProcessSpec = field(default_factory=ProcessSpec)
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -491,7 +498,7 @@ class SceneSpec:
 
     def touching_pairs(self) -> set[frozenset[str]]:
         """Material pairs that can come into contact in this scene."""
-        granule_materials = {g.material for g in self.granules}
+        granule_materials = self.granule_materials
         hammer_materials = {h.material for h in self.hammers}
         pairs = {frozenset((g, h)) for g in granule_materials for h in hammer_materials}
         if self.granule_collisions:
@@ -499,6 +506,20 @@ class SceneSpec:
         if self.chamber is not None:
             pairs |= {frozenset((g, self.chamber.material)) for g in granule_materials}
         return pairs
+
+    @property
+    def granule_materials(self) -> set[str]:
+        """The materials of the granules present and of those a feed brings."""
+        feed = self.process.feed
+        return {g.material for g in self.granules} | ({feed.material} if feed else set())
+
+    @property
+    def has_bonds(self) -> bool:
+        """Whether any granule, present or fed, is held in a cell by a bond."""
+        feed = self.process.feed
+        return any(g.bond_force is not None for g in self.granules) or (
+            feed is not None and feed.bond_force is not None
+        )
 
     @property
     def machine_dt(self) -> float:

@@ -3,8 +3,9 @@ simulated time, phase-locked: frame k is taken at the first step whose end time 
 k·every (never "every since the last"), so a run's frames do not drift.
 
 Each recorder is built with the run directory and the system (:class:`~perga.model.spec.
-SceneSpec`); ``record(frame, impacts)`` appends a frame, ``impacts`` being every impact the run
-has recorded so far (the run's impact table). A table recorder owns one CSV table.
+SceneSpec`); ``record(frame, events)`` appends a frame, ``events`` being everything the run has
+recorded so far (:class:`~perga.model.records.Events`: impacts, releases, departures). A table
+recorder owns one CSV table.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Protocol
 import numpy as np
 
 from perga.model.frame import Frame
-from perga.model.records import Impact
+from perga.model.records import Departure, Events, Impact, Release
 from perga.model.spec import SceneSpec
 from perga.output.tables import Table
 from perga.output.vtk import VtkRecorder
@@ -26,11 +27,11 @@ from perga.output.vtk import VtkRecorder
 
 class Recorder(Protocol):
     """What the runner needs of a recorder: built as ``Recorder(directory, spec)``,
-    ``record(frame, impacts)`` at each frame and ``close()`` at the end of the run, whatever
+    ``record(frame, events)`` at each frame and ``close()`` at the end of the run, whatever
     ended it."""
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
-        """Append what this recorder keeps of ``frame`` and of ``impacts`` (all so far)."""
+    def record(self, frame: Frame, events: Events) -> None:
+        """Append what this recorder keeps of ``frame`` and of ``events`` (all so far)."""
 
     def close(self) -> None:
         """Finish the recorder's files (idempotent)."""
@@ -65,22 +66,38 @@ class PhaseLock:
 
 
 class GranuleRecorder(TableRecorder):
-    """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed (SI)."""
-
-    columns = ("time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed")
+    """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed, radius, mass (SI); with
+    held granules in the system also ``held`` (1 while in its cell), with damage ``survival``
+    (expected, -) and ``broken`` (1 if drawn broken)."""
 
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
-        self.table = Table(directory / "granules.csv", self.columns)
+        self.held = spec.has_bonds
+        self.damage = spec.process.damage is not None
+        columns = ["time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed", "radius"]
+        columns += ["mass"] + ["held"] * self.held + ["survival", "broken"] * self.damage
+        self.table = Table(directory / "granules.csv", columns)
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+    def record(self, frame: Frame, events: Events) -> None:
         """Append one frame."""
         g = frame.granules
-        p, v, w = g.positions, g.velocities, g.angular_velocities
-        speed = np.hypot(v[:, 0], v[:, 1])
-        t = frame.time
-        self.table.write(
-            (t, i, p[i, 0], p[i, 1], v[i, 0], v[i, 1], w[i], speed[i]) for i in range(len(p))
-        )
+        p, v = g.positions, g.velocities
+        columns = [
+            np.full(len(p), frame.time),
+            g.ids,
+            p[:, 0],
+            p[:, 1],
+            v[:, 0],
+            v[:, 1],
+            g.angular_velocities,
+            np.hypot(v[:, 0], v[:, 1]),
+            g.radii,
+            g.masses,
+        ]
+        if self.held:
+            columns.append(g.held.astype(np.int64))
+        if self.damage:
+            columns += [g.survival, g.broken.astype(np.int64)]
+        self.table.write(zip(*(c.tolist() for c in columns), strict=True))
 
 
 class HammerRecorder(TableRecorder):
@@ -92,7 +109,7 @@ class HammerRecorder(TableRecorder):
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "hammers.csv", self.columns)
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+    def record(self, frame: Frame, events: Events) -> None:
         """Append one frame."""
         t, m = frame.time, frame.machine
         alpha, v, spin = m.swing_angles, m.velocities, m.angular_velocities
@@ -101,37 +118,81 @@ class HammerRecorder(TableRecorder):
         self.table.write(rows)
 
 
-def _impact_columns() -> tuple[str, ...]:
-    """Impact's fields, its vectors split into components (point -> x, y; normal -> nx, ny;
-    granule_velocity_before -> vx_before, vy_before)."""
-    split = {
-        "point": ("x", "y"),
-        "normal": ("nx", "ny"),
-        "granule_velocity_before": ("vx_before", "vy_before"),
-    }
-    return tuple(c for f in fields(Impact) for c in split.get(f.name, (f.name,)))
+DAMAGE_FIELDS = ("breakage_probability", "survival")
+"""The impact fields only a scene with damage gives."""
+
+SPLIT = {
+    "point": ("x", "y"),
+    "normal": ("nx", "ny"),
+    "granule_velocity_before": ("vx_before", "vy_before"),
+}
+"""Vector fields of the records and their columns."""
 
 
-def _impact_row(impact: Impact) -> tuple[object, ...]:
-    values = (getattr(impact, f.name) for f in fields(Impact))
-    return tuple(c for v in values for c in (v if isinstance(v, tuple) else (v,)))
+def record_columns(record: type, omit: frozenset[str] = frozenset()) -> tuple[str, ...]:
+    """A record class's fields but ``omit`` as columns, vectors split into components
+    (``SPLIT``)."""
+    names = (f.name for f in fields(record) if f.name not in omit)
+    return tuple(c for name in names for c in SPLIT.get(name, (name,)))
 
 
-class ImpactRecorder(TableRecorder):
+def record_row(record: object, omit: frozenset[str] = frozenset()) -> tuple[object, ...]:
+    """One record's values in the order of ``record_columns``; booleans as 0/1."""
+    names = (f.name for f in fields(record) if f.name not in omit)  # type: ignore[arg-type]
+    values = (getattr(record, name) for name in names)
+    flat = (c for v in values for c in (v if isinstance(v, tuple) else (v,)))
+    return tuple(int(c) if isinstance(c, bool) else c for c in flat)
+
+
+class EventRecorder(TableRecorder):
+    """A table of one kind of event (``kind``: the name of its list in
+    :class:`~perga.model.records.Events`, ``record_type`` its class), appended as they come."""
+
+    kind: str
+    record_type: type
+    file: str
+
+    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+        self.omit = self.omitted(spec)
+        self.table = Table(directory / self.file, record_columns(self.record_type, self.omit))
+        self.written = 0
+
+    @staticmethod
+    def omitted(spec: SceneSpec) -> frozenset[str]:
+        """Fields the scene does not give (none by default)."""
+        return frozenset()
+
+    def record(self, frame: Frame, events: Events) -> None:
+        """Append the events recorded since the last call."""
+        new: Sequence[object] = getattr(events, self.kind)[self.written :]
+        self.table.write(record_row(e, self.omit) for e in new)
+        self.written += len(new)
+
+
+class ImpactRecorder(EventRecorder):
     """impacts.csv: every granule-hammer impact, one column per field of
     :class:`~perga.model.records.Impact` (SI)."""
 
-    columns = _impact_columns()
+    kind, record_type, file = "impacts", Impact, "impacts.csv"
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
-        self.table = Table(directory / "impacts.csv", self.columns)
-        self.written = 0
+    @staticmethod
+    def omitted(spec: SceneSpec) -> frozenset[str]:
+        """The breakage columns, unless the scene has damage."""
+        return frozenset() if spec.process.damage else frozenset(DAMAGE_FIELDS)
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
-        """Append the impacts recorded since the last call."""
-        new = impacts[self.written :]
-        self.table.write(_impact_row(i) for i in new)
-        self.written += len(new)
+
+class ReleaseRecorder(EventRecorder):
+    """releases.csv: every granule pulled out of its cell (:class:`~perga.model.records.
+    Release`: time, granule, force; SI)."""
+
+    kind, record_type, file = "releases", Release, "releases.csv"
+
+
+class OutflowRecorder(EventRecorder):
+    """outflow.csv: every granule gone through the outlet (:class:`~perga.model.records.
+    Departure`; SI)."""
+
+    kind, record_type, file = "departures", Departure, "outflow.csv"
 
 
 class EnergyRecorder(TableRecorder):
@@ -144,20 +205,22 @@ class EnergyRecorder(TableRecorder):
         "contact_dissipation",
         "friction",
         "drag",
+        "inflow",
+        "outflow",
         "closure",
     )
 
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.table = Table(directory / "energy.csv", self.columns)
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+    def record(self, frame: Frame, events: Events) -> None:
         """Append one frame (its ledger: the run must track energy)."""
         e = frame.energy
         if e is None:
             raise ValueError("energy.csv needs frames with the energy ledger (track_energy)")
         self.table.write(
             [(frame.time, e.kinetic, e.drive_work, e.contact_dissipation, e.friction, e.drag,
-              e.closure)]
+              e.inflow, e.outflow, e.closure)]
         )  # fmt: skip
 
 
@@ -166,6 +229,8 @@ RECORDERS: dict[str, type] = {
     "hammers": HammerRecorder,
     "impacts": ImpactRecorder,
     "energy": EnergyRecorder,
+    "releases": ReleaseRecorder,
+    "outflow": OutflowRecorder,
     "vtk": VtkRecorder,
 }
 """Recorder class by the name used in the case file's output.record."""

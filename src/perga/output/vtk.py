@@ -5,11 +5,15 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
 
 * ``granules.pvd`` + ``granules_NNNNNN.vtu``, one per frame: a point per granule with a
   VTK_VERTEX cell; point data ``radius`` (m), ``velocity`` (m/s, 3 components), ``speed``
-  (m/s), ``angular_velocity`` (rad/s), ``kinetic_energy`` (½mv² + ½Iω², J), ``id`` (index in
-  the spec), ``material`` (index into the sorted granule material names, listed in a comment of
-  ``granules.pvd``), ``impacts`` (granule-hammer impacts so far); with soft contacts also
-  ``contacts`` (granule, wall and hammer contacts now: overlap > 0, hammers by the kernel's
-  active flag) and ``overlap_max`` (largest of those overlaps, m; 0 without contact).
+  (m/s), ``angular_velocity`` (rad/s), ``kinetic_energy`` (½mv² + ½Iω², J), ``id`` (the
+  granule's number for the whole run: granules fed later get the next ones, and a granule
+  keeps its number when others leave), ``material`` (index into the sorted granule material
+  names, listed in a comment of ``granules.pvd``), ``impacts`` (granule-hammer impacts so far);
+  with held granules in the system ``held`` (1 while in its cell), with damage ``survival``
+  (expected, -) and ``broken`` (1 if drawn broken); with soft contacts also ``contacts``
+  (granule, wall and hammer contacts now: overlap > 0, hammers by the kernel's active flag) and
+  ``overlap_max`` (largest of those overlaps, m; 0 without contact). The number of points
+  changes from frame to frame when granules are fed or leave.
 * ``machine.pvd`` + ``machine_NNNNNN.vtu``, one per frame: each hammer as a VTK_POLYGON posed at
   the frame, then the rotor disc (its outline from the rotor's file, or a 64-gon of the rotor
   radius); cell data ``id`` (hammer index,
@@ -19,17 +23,19 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   and the rotor).
 * ``chamber.vtu``: the wall's inner outline (from the chamber's file, or its circle as 256
   segments) as one closed VTK_POLY_LINE, written at the first frame (absent without a chamber).
-* ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule through its recorded frame
-  positions; point data ``time`` (s) and ``speed`` (m/s), cell data ``id``. Each frame's time,
-  positions and speeds are appended to the scratch file ``.trajectories.f8`` (raw float64,
-  flushed every frame) rather than kept in memory, so the recorder holds O(granules) whatever
-  the number of frames; ``close`` (called by the runner whatever ended the run) builds the file
-  from it, in blocks of frames, and deletes it. Building needs the file's arrays in memory
-  once (~56 B per granule and frame).
+* ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule (in the order of ids)
+  through the frames it was present in; point data ``time`` (s) and ``speed`` (m/s), cell data
+  ``id``. Each frame's rows (time, id, x, y, speed) are appended to the scratch file
+  ``.trajectories.f8`` (raw float64, flushed every frame) rather than kept in memory, so the
+  recorder holds O(granules) whatever the number of frames; ``close`` (called by the runner
+  whatever ended the run) builds the file from it, in blocks of rows, and deletes it. Building
+  needs the file's points in memory once (~64 B per granule and frame).
 * ``impacts.vtu`` (at ``close``): a VTK_VERTEX per granule-hammer impact at its contact point;
-  point data ``time`` (s), ``granule``, ``hammer``, ``normal_impulse`` (N·s),
-  ``granule_energy_gain`` (J), ``dissipated`` (J), ``normal`` (3 components). With no impacts
-  the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty arrays).
+  point data ``time`` (s), ``granule`` (id), ``hammer``, ``normal_impulse`` (N·s),
+  ``granule_energy_gain`` (J), ``dissipated`` (J), ``specific_energy`` (½v_n², J/kg),
+  ``normal`` (3 components), with damage ``breakage_probability`` and ``survival``. With no
+  impacts the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty
+  arrays).
 
 With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the system) also
 ``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
@@ -54,7 +60,7 @@ from numpy.typing import NDArray
 
 from perga.geometry.polygon import outline_or_circle
 from perga.model.frame import Frame, MachineFrame
-from perga.model.records import Impact
+from perga.model.records import Events, Impact
 from perga.model.spec import RotorSpec, SceneSpec
 from perga.output import vtk3d
 
@@ -66,6 +72,8 @@ CHAMBER_SEGMENTS = 256
 """Segments of the polyline drawn for the chamber's inner circle."""
 TRAJECTORY_BLOCK = 1 << 22
 """Values (float64) of the trajectory scratch read at a time by ``close``: 32 MiB."""
+SCRATCH_COLUMNS = 5
+"""Values per granule and frame in the trajectory scratch: time, id, x, y, speed."""
 
 
 class PvdSeries:
@@ -129,7 +137,7 @@ def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
 
 class VtkRecorder:
     """Writes the files listed in the module doc into ``directory / "vtk"`` for the system
-    ``spec``: ``record(frame, impacts)`` a frame (``impacts``: every impact so far), ``close()``
+    ``spec``: ``record(frame, events)`` a frame (``events``: everything so far), ``close()``
     the trajectories and impacts (idempotent)."""
 
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
@@ -144,7 +152,9 @@ class VtkRecorder:
         self.scratch = self.directory / ".trajectories.f8"
         self._scratch: BinaryIO | None = None
         self._impacts: list[Impact] = []
-        self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)
+        self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)  # by id, grows
+        self._held = spec.has_bonds
+        self._damage = spec.process.damage is not None
         self._outlines = [np.array(h.outline, dtype=float) for h in spec.hammers]
         self._outlines.append(_disc(spec.rotor))
         self._closed = False
@@ -183,17 +193,16 @@ class VtkRecorder:
             chamber = vtk3d.part_grid(part)
             chamber.save(self.directory / "chamber3d.vtu", binary=True, compression="zlib")
 
-    def record(self, frame: Frame, impacts: Sequence[Impact]) -> None:
+    def record(self, frame: Frame, events: Events) -> None:
         """Write the granule and machine frames of ``frame`` and update both ``.pvd``."""
         if not self._started:
             self._start(frame)
         g, t = frame.granules, frame.time
         p, v, w = g.positions, g.velocities, g.angular_velocities
         speed = np.hypot(v[:, 0], v[:, 1])
-        new = impacts[len(self._impacts) :]
+        new = events.impacts[len(self._impacts) :]
         self._impacts += new
-        for impact in new:
-            self._impact_count[impact.granule] += 1
+        self._count([i.granule for i in new], int(g.ids.max(initial=-1)) + 1)
 
         mesh = _vertices(len(p), p)
         data = mesh.point_data
@@ -204,7 +213,11 @@ class VtkRecorder:
         data["kinetic_energy"] = 0.5 * g.masses * speed**2 + 0.5 * g.inertia * w**2
         data["id"] = g.ids
         data["material"] = g.materials
-        data["impacts"] = self._impact_count
+        data["impacts"] = self._impact_count[g.ids]
+        if self._held:
+            data["held"] = g.held.astype(np.uint8)
+        if self._damage:
+            data["survival"], data["broken"] = g.survival, g.broken.astype(np.uint8)
         if g.contacts is not None and g.overlap_max is not None:
             data["contacts"], data["overlap_max"] = g.contacts, g.overlap_max
         drawing = self.spec.drawing
@@ -216,13 +229,18 @@ class VtkRecorder:
         self.machine.add(t, machine_mesh(self._outlines, origins, angles, cell_data))
         if self.machine3d is not None and self._machine3d is not None:
             self.machine3d.add(t, self._machine3d.mesh(origins, angles, cell_data))
-        row = np.empty((len(p), 3))
-        row[:, :2], row[:, 2] = p, speed
+        rows = np.column_stack((np.full(len(p), t), g.ids, p, speed))
         assert self._scratch is not None
-        self._scratch.write(np.float64(t).tobytes())
-        self._scratch.write(row.tobytes())
+        self._scratch.write(rows.tobytes())
         self._scratch.flush()
         self.frames += 1
+
+    def _count(self, granules: list[int], ids: int) -> None:
+        """Add impacts of ``granules`` (ids) to the counts, which cover ids below ``ids``."""
+        size = max(ids, max(granules, default=-1) + 1, len(self._impact_count))
+        if size > len(self._impact_count):
+            self._impact_count = np.pad(self._impact_count, (0, size - len(self._impact_count)))
+        np.add.at(self._impact_count, np.asarray(granules, dtype=np.int64), 1)
 
     def close(self) -> None:
         """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded)."""
@@ -236,34 +254,37 @@ class VtkRecorder:
         self._write_impacts()
 
     def _write_trajectories(self) -> None:
-        """``trajectories.vtu`` from the scratch file (frame-major) read in blocks of frames."""
+        """``trajectories.vtu`` from the scratch file (frame-major rows), read in blocks."""
         assert self._scratch is not None
         self._scratch.close()
-        frames, n = self.frames, len(self.spec.granules)
-        scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=(frames, 1 + 3 * n))
-        points = np.zeros((n, frames, 3))  # granule-major
-        speed = np.empty((n, frames))
-        block = max(1, TRAJECTORY_BLOCK // (1 + 3 * n))
-        for a in range(0, frames, block):
-            rows = np.asarray(scratch[a : a + block, 1:])
-            rows = rows.reshape(len(rows), n, 3)
-            points[:, a : a + len(rows), :2] = rows[:, :, :2].transpose(1, 0, 2)
-            speed[:, a : a + len(rows)] = rows[:, :, 2].T
-        times = np.array(scratch[:, 0])
+        size = self.scratch.stat().st_size // (8 * SCRATCH_COLUMNS)
+        if size == 0:  # no granule in any frame: an empty file
+            pv.UnstructuredGrid().save(self.directory / "trajectories.vtu", binary=True)
+            return
+        shape = (size, SCRATCH_COLUMNS)
+        scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=shape)
+        ids = np.asarray(scratch[:, 1]).astype(np.int64)
+        order = np.argsort(ids, kind="stable")  # granule-major, each in time order
+        points = np.zeros((size, 3))
+        time, speed = np.empty(size), np.empty(size)
+        block = max(1, TRAJECTORY_BLOCK // SCRATCH_COLUMNS)
+        for a in range(0, size, block):
+            rows = np.asarray(scratch[order[a : a + block]])
+            time[a : a + len(rows)] = rows[:, 0]
+            points[a : a + len(rows), :2] = rows[:, 2:4]
+            speed[a : a + len(rows)] = rows[:, 4]
         del scratch
-        cells = np.empty((n, frames + 1), dtype=np.int64)
-        cells[:, 0] = frames
-        cells[:, 1:] = np.arange(n * frames, dtype=np.int64).reshape(n, frames)
+        granules, counts = np.unique(ids[order], return_counts=True)
+        cells = np.insert(np.arange(size, dtype=np.int64), np.cumsum(counts) - counts, counts)
         trajectories = pv.UnstructuredGrid(
-            cells.ravel(),
-            np.full(n, pv.CellType.POLY_LINE, dtype=np.uint8),
-            points.reshape(-1, 3),
+            cells,
+            np.full(len(granules), pv.CellType.POLY_LINE, dtype=np.uint8),
+            points,
             deep=False,
         )
-        del cells
-        trajectories.point_data["time"] = np.tile(times, n)
-        trajectories.point_data["speed"] = speed.reshape(-1)
-        trajectories.cell_data["id"] = np.arange(n, dtype=np.int64)
+        trajectories.point_data["time"] = time
+        trajectories.point_data["speed"] = speed
+        trajectories.cell_data["id"] = granules
         trajectories.save(self.directory / "trajectories.vtu", binary=True, compression="zlib")
 
     def _write_impacts(self) -> None:
@@ -274,6 +295,8 @@ class VtkRecorder:
         columns: dict[str, np.ndarray] = {
             name: np.array([getattr(i, name) for i in impacts], dtype=float)
             for name in ("time", "normal_impulse", "granule_energy_gain", "dissipated")
+            + ("specific_energy",)
+            + ("breakage_probability", "survival") * self._damage
         }
         for name in ("granule", "hammer"):
             columns[name] = np.array([getattr(i, name) for i in impacts], dtype=np.int64)

@@ -9,13 +9,13 @@ writer writes float64 values and every other body's own bits back.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import pymunk
 import pytest
 from tests.engine.helpers import plate
 
-from perga.contact.protocol import GranuleState
 from perga.contact.rigid import batch as state_module
 from perga.contact.rigid.batch import GranuleReader, GranuleWriter
 from perga.contact.rigid.bodies import RigidBodies, attach_bodies
@@ -86,10 +86,18 @@ def _spec(n_rings: int = 3) -> SceneSpec:
     )
 
 
-def _loop(sim: Simulation) -> GranuleState:
+class Kinematics(NamedTuple):
+    """What a reader reads, SI: positions (n, 2), velocities (n, 2), angular velocities (n,)."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    angular_velocities: np.ndarray
+
+
+def _loop(sim: Simulation) -> Kinematics:
     """Reference: every granule body's attributes read one by one."""
     bodies = sim.contacts.bodies.granule_bodies
-    return GranuleState(
+    return Kinematics(
         positions=np.array([tuple(b.position) for b in bodies], dtype=float) * u.LENGTH,
         velocities=np.array([tuple(b.velocity) for b in bodies], dtype=float) * u.VELOCITY,
         angular_velocities=np.array([b.angular_velocity for b in bodies], dtype=float)
@@ -97,7 +105,7 @@ def _loop(sim: Simulation) -> GranuleState:
     )
 
 
-def _assert_same(got: GranuleState, expected: GranuleState) -> None:
+def _assert_same(got: tuple, expected: Kinematics) -> None:
     for name in ("positions", "velocities", "angular_velocities"):
         a, b = getattr(got, name), getattr(expected, name)
         assert a.shape == b.shape and a.dtype == np.float64, name
@@ -126,11 +134,11 @@ def test_scene_is_a_real_test(stepped: Simulation) -> None:
 def test_matches_python_loop_exactly(stepped: Simulation) -> None:
     reader = GranuleReader(*_parts(stepped.contacts.bodies))
     expected = _loop(stepped)
-    _assert_same(reader.read(), expected)
+    _assert_same(Kinematics(*reader.read()), expected)
     np.testing.assert_array_equal(reader.positions(), expected.positions)
     np.testing.assert_array_equal(reader.velocities(), expected.velocities)
     np.testing.assert_array_equal(reader.angular_velocities(), expected.angular_velocities)
-    _assert_same(GranuleReader(*_parts(stepped.contacts.bodies)).read(), expected)
+    _assert_same(Kinematics(*GranuleReader(*_parts(stepped.contacts.bodies)).read()), expected)
 
 
 def test_matches_loop_while_stepping() -> None:
@@ -138,13 +146,13 @@ def test_matches_loop_while_stepping() -> None:
     reader = GranuleReader(*_parts(sim.contacts.bodies))
     for _ in range(5):
         sim.run(4e-4)
-        _assert_same(reader.read(), _loop(sim))
+        _assert_same(Kinematics(*reader.read()), _loop(sim))
 
 
 def test_rows_are_in_spec_order() -> None:
     spec = _spec(n_rings=2)
     reader = GranuleReader(*_parts(attach_bodies(build_machine(spec))))
-    state = reader.read()
+    state = Kinematics(*reader.read())
     assert reader.count == len(spec.granules) == state.positions.shape[0]
     for i, g in enumerate(spec.granules):
         # SI -> mm -> SI: x / 1e-3 * 1e-3 is within 1 ulp of x
@@ -161,14 +169,14 @@ def test_survives_reordering_of_chipmunks_body_array() -> None:
     sim = Simulation(_spec(n_rings=2))
     reader = GranuleReader(*_parts(sim.contacts.bodies))
     sim.run(2e-4)
-    _assert_same(reader.read(), _loop(sim))
+    _assert_same(Kinematics(*reader.read()), _loop(sim))
     # removing a body moves Chipmunk's last body into its slot; Pymunk creates and adds
     # space.static_body on first access: both change the rows of the batch read
     free = sim.machine.hammer_bodies[-1]
     sim.machine.space.remove(free, *free.shapes)
     assert sim.machine.space.static_body is not None
     sim.run(2e-4)
-    _assert_same(reader.read(), _loop(sim))
+    _assert_same(Kinematics(*reader.read()), _loop(sim))
 
 
 def test_granule_missing_from_space_is_an_error() -> None:
@@ -202,7 +210,7 @@ def test_no_granules() -> None:
         contacts=(),
         granule_dt=1e-5,
     )
-    state = GranuleReader(*_parts(attach_bodies(build_machine(spec)))).read()
+    state = Kinematics(*GranuleReader(*_parts(attach_bodies(build_machine(spec)))).read())
     assert state.positions.shape == (0, 2)
     assert state.velocities.shape == (0, 2)
     assert state.angular_velocities.shape == (0,)
@@ -229,7 +237,7 @@ def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
         *_parts(scene)
     )  # its construction check writes and undoes: nothing changes
     before, others = _loop(stepped), _others(scene)
-    _assert_same(writer.read(), before)
+    _assert_same(Kinematics(*writer.read()), before)
     v, p = writer.read_internal(positions=True)
     assert p is not None
     np.testing.assert_array_equal(p * u.LENGTH, before.positions)

@@ -65,20 +65,22 @@ def test_plain_tuples_for_advance_follow_the_field_order():
     array of its name."""
     g = _scene()
     polys, table = g.polygons, g.polygon_table
-    settings, state, props, params, walls, polygons, nbrs, work = g._bundles(
+    settings, state, props, bonds, params, walls, polygons, nbrs, work = g._bundles(
         polys, table, 7, 0.5, 3.0
     )
     named = kernel.Settings(*settings)
-    assert (named.n_steps, named.dt, named.skin, named.drag, named.v_cap) == (
+    assert (named.n_steps, named.dt, named.skin, named.drag, named.v_cap, named.first_step) == (
         7,
         g.dt,
         g.skin,
         0.5,
         3.0,
+        g.steps,
     )
     assert named.gravity is g.gravity and named.pairs is True and named.rebuild is True
     _same(kernel.Granules(*state), g)
     _same(kernel.GranuleProps(*props), g)
+    _same(kernel.Bonds(*bonds), g)
     assert params is g.params
     named = kernel.Walls(*walls)
     assert named.rows is g.walls and named.hist is g.wall_hist
@@ -102,7 +104,7 @@ def test_advance_takes_named_or_plain_bundles_alike():
     for _ in range(10):
         plain.step(20)
         polys, table = named.polygons, named.polygon_table
-        settings, state, props, params, walls, _, nbrs, work = named._bundles(
+        settings, state, props, bonds, params, walls, _, nbrs, work = named._bundles(
             polys, table, 20, 0.0, math.inf
         )
         polygons = kernel.Polygons(
@@ -110,10 +112,11 @@ def test_advance_takes_named_or_plain_bundles_alike():
         )
         named.start, named.nbr, named.hist, _ = kernel.advance(
             kernel.Settings(*settings), kernel.Granules(*state), kernel.GranuleProps(*props),
-            params, kernel.Walls(*walls), polygons, kernel.NeighbourList(*nbrs),
-            kernel.Work(*work),
+            kernel.Bonds(*bonds), params, kernel.Walls(*walls), polygons,
+            kernel.NeighbourList(*nbrs), kernel.Work(*work),
         )  # fmt: skip
         named._rebuild = False
+        named.steps += 20
         named.time += 20 * named.dt
     assert plain.polygon_hist[:, :, HIST_NORMAL_IMPULSE].any()  # polygon contacts happened
     for name in ("x", "v", "w", "a_prev", "f", "tq", "hist", "wall_hist", "polygon_hist"):

@@ -51,7 +51,6 @@ import pymunk
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
-from perga.contact.protocol import GranuleState
 from perga.engine import units as u
 
 FloatArray = NDArray[np.float64]
@@ -117,14 +116,11 @@ class GranuleReader:
         (w,) = self._read(_F.ANGULAR_VELOCITY)
         return w[:, 0] * u.ANGULAR_VELOCITY
 
-    def read(self) -> GranuleState:
-        """Positions, velocities and angular velocities from a single pass."""
+    def read(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Positions (n, 2), m, velocities (n, 2), m/s, and angular velocities (n,), rad/s,
+        from a single pass."""
         p, v, w = self._read(_F.POSITION | _F.VELOCITY | _F.ANGULAR_VELOCITY)
-        return GranuleState(
-            positions=p * u.LENGTH,
-            velocities=v * u.VELOCITY,
-            angular_velocities=w[:, 0] * u.ANGULAR_VELOCITY,
-        )
+        return p * u.LENGTH, v * u.VELOCITY, w[:, 0] * u.ANGULAR_VELOCITY
 
     # --- internals ---------------------------------------------------------------------------
 

@@ -45,7 +45,9 @@ GRANULE_GROUP = 2
 class RigidBodies:
     """The rigid model's objects in a machine's space.
 
-    ``shape_owner`` maps every granule and hammer shape to (kind, index into the spec's list);
+    ``shape_owner`` maps every granule shape to ("granule", its id) and every hammer shape to
+    ("hammer", its index in the spec's list); ``granule_bodies`` and ``granule_shapes`` are in
+    the contact model's row order;
     ``wall_shapes`` are the chamber's. ``collision_types`` maps (kind, material) to the Chipmunk
     collision type; ``pairs`` lists the (type_a, type_b) handlers installed, type_a being a
     granule type.
@@ -57,6 +59,9 @@ class RigidBodies:
     wall_shapes: list[pymunk.Poly]
     shape_owner: dict[pymunk.Shape, tuple[Kind, int]]
     collision_types: dict[tuple[Kind, str], int]
+    elasticity: dict[str, float] = field(default_factory=dict)
+    friction: dict[str, float] = field(default_factory=dict)
+    granule_group: int = 0
     pairs: list[tuple[int, int]] = field(default_factory=list)
     handlers: dict[tuple[int, int, Phase], list[Callback]] = field(default_factory=dict)
 
@@ -64,6 +69,30 @@ class RigidBodies:
     def space(self) -> pymunk.Space:
         """The machine's space, which holds them."""
         return self.machine.space
+
+    def add_granule(self, g: GranuleSpec, id_: int) -> pymunk.Body:
+        """Add granule ``g``, numbered ``id_``, to the space; returns its body."""
+        body, shape = _build_granule(g)
+        shape.filter = pymunk.ShapeFilter(group=self.granule_group)
+        shape.elasticity = self.elasticity.get(g.material, 1.0)
+        shape.friction = self.friction.get(g.material, 1.0)
+        shape.collision_type = self.collision_types[("granule", g.material)]
+        self.machine.space.add(body, shape)
+        self.granule_bodies.append(body)
+        self.granule_shapes.append(shape)
+        self.shape_owner[shape] = ("granule", id_)
+        return body
+
+    def remove_granules(self, rows: list[int]) -> None:
+        """Take the granules at ``rows`` (of ``granule_bodies``) out of the space."""
+        gone = set(rows)
+        for row in sorted(gone):
+            body, shape = self.granule_bodies[row], self.granule_shapes[row]
+            self.machine.space.remove(body, shape)
+            del self.shape_owner[shape]
+        keep = [i for i in range(len(self.granule_bodies)) if i not in gone]
+        self.granule_bodies = [self.granule_bodies[i] for i in keep]
+        self.granule_shapes = [self.granule_shapes[i] for i in keep]
 
     def listen(
         self, phase: Phase, callback: Callback, kinds: tuple[Kind, Kind] | None = None
@@ -156,9 +185,10 @@ def _build_granule(g: GranuleSpec) -> tuple[pymunk.Body, pymunk.Circle]:
     return body, pymunk.Circle(body, u.to_internal(g.radius, u.LENGTH))
 
 
-def attach_bodies(machine: Machine) -> RigidBodies:
+def attach_bodies(machine: Machine, materials: set[str] | None = None) -> RigidBodies:
     """Add the granules, the chamber wall, every shape's contact values and the pair handlers
-    to ``machine``'s space (module doc)."""
+    to ``machine``'s space (module doc); ``materials``: granule materials that may come later
+    (a feed), besides those present."""
     spec, space = machine.spec, machine.space
     collision_types: dict[tuple[Kind, str], int] = {}
 
@@ -168,49 +198,38 @@ def attach_bodies(machine: Machine) -> RigidBodies:
     contacts = {c.key: c for c in spec.contacts}
     elasticity, unsplit_e = factor_pair_table({k: c.restitution for k, c in contacts.items()})
     friction, unsplit_f = factor_pair_table({k: c.friction for k, c in contacts.items()})
-
-    def set_values(shape: pymunk.Shape, kind: Kind, material: str) -> None:
-        shape.elasticity = elasticity.get(material, 1.0)
-        shape.friction = friction.get(material, 1.0)
-        shape.collision_type = ctype(kind, material)
-
-    shape_owner: dict[pymunk.Shape, tuple[Kind, int]] = {}
-    for index, (h, shapes) in enumerate(zip(spec.hammers, machine.hammer_shapes, strict=True)):
+    for h, shapes in zip(spec.hammers, machine.hammer_shapes, strict=True):
         for shape in shapes:
-            set_values(shape, "hammer", h.material)
-            shape_owner[shape] = ("hammer", index)
-
-    granule_bodies: list[pymunk.Body] = []
-    granule_shapes: list[pymunk.Circle] = []
-    granule_group = 0 if spec.granule_collisions else GRANULE_GROUP
+            shape.elasticity = elasticity.get(h.material, 1.0)
+            shape.friction = friction.get(h.material, 1.0)
+            shape.collision_type = ctype("hammer", h.material)
+    for material in sorted({g.material for g in spec.granules} | (materials or set())):
+        ctype("granule", material)
+    bodies = RigidBodies(
+        machine=machine,
+        granule_bodies=[],
+        granule_shapes=[],
+        wall_shapes=[],
+        shape_owner={
+            s: ("hammer", k) for k, shapes in enumerate(machine.hammer_shapes) for s in shapes
+        },
+        collision_types=collision_types,
+        elasticity=elasticity,
+        friction=friction,
+        granule_group=0 if spec.granule_collisions else GRANULE_GROUP,
+    )
     for index, g in enumerate(spec.granules):
-        body, shape = _build_granule(g)
-        space.add(body)
-        shape.filter = pymunk.ShapeFilter(group=granule_group)
-        set_values(shape, "granule", g.material)
-        space.add(shape)
-        granule_bodies.append(body)
-        granule_shapes.append(shape)
-        shape_owner[shape] = ("granule", index)
-
-    wall_shapes: list[pymunk.Poly] = []
+        bodies.add_granule(g, index)
     if spec.chamber is not None:
         static = space.static_body
         for piece in spec.chamber.pieces()[0]:
             shape = pymunk.Poly(static, [u.vec_to_internal(tuple(v), u.LENGTH) for v in piece])
             shape.filter = pymunk.ShapeFilter(group=HAMMER_GROUP)
-            set_values(shape, "wall", spec.chamber.material)
+            shape.elasticity = elasticity.get(spec.chamber.material, 1.0)
+            shape.friction = friction.get(spec.chamber.material, 1.0)
+            shape.collision_type = ctype("wall", spec.chamber.material)
             space.add(shape)
-            wall_shapes.append(shape)
-
-    bodies = RigidBodies(
-        machine=machine,
-        granule_bodies=granule_bodies,
-        granule_shapes=granule_shapes,
-        wall_shapes=wall_shapes,
-        shape_owner=shape_owner,
-        collision_types=collision_types,
-    )
+            bodies.wall_shapes.append(shape)
     granule_keys = [k for k in collision_types if k[0] == "granule"]
     other_keys = [k for k in collision_types if k[0] != "granule"]
     candidate = [(g, h) for g in granule_keys for h in other_keys]

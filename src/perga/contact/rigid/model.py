@@ -6,13 +6,25 @@ The granules move in the machine's own ``space.step`` (drift, collision detectio
 handlers to the machine's space (:mod:`~perga.contact.rigid.bodies`), replaces the contacts of
 hammers of several pieces by their outline's (:mod:`~perga.contact.rigid.outline`), records the
 impacts (:mod:`~perga.contact.rigid.impacts`) and measures what the contacts dissipate
-(:mod:`~perga.contact.rigid.dissipation`). The granules' kinetic energy and gravity's work on
-them are the machine meter's, as for every body of the space (:mod:`perga.engine.energy`).
+(:mod:`~perga.contact.rigid.dissipation`).
+
+A held granule (a comb's cell: ``GranuleSpec.bond_force``) moves freely within a machine step,
+so that a hammer strikes a granule of its own mass; after the step its bond must supply the
+impulse m·|v| that brings it back to rest, a force m·|v|/dt. While that force is at most the
+bond's, the granule is set back at rest in its cell (for a static load such as gravity the
+force is the load itself, exactly); at the first step where it is larger the bond breaks, having
+taken the most it can, bond·dt, from the granule's momentum. The kinetic energy the bond takes is
+part of the contacts' dissipation (the cell is a contact).
 """
 
 from __future__ import annotations
 
-from perga.contact.protocol import GranuleState
+from collections.abc import Sequence
+
+import numpy as np
+import pymunk
+
+from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.rigid.batch import GranuleReader, GranuleWriter
 from perga.contact.rigid.bodies import attach_bodies
 from perga.contact.rigid.dissipation import ArbiterMeter
@@ -20,7 +32,28 @@ from perga.contact.rigid.impacts import ImpactRecorder
 from perga.contact.rigid.outline import OutlineFilter
 from perga.engine import units as u
 from perga.engine.machine import Machine
-from perga.model.records import Impact, LedgerTerms
+from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.spec import GranuleSpec
+
+
+class _Kinematics:
+    """The granule bodies' velocities for the kicks (a writer rebuilt when granules change)."""
+
+    def __init__(self, model: RigidContacts) -> None:
+        self._model = model
+
+    @property
+    def count(self) -> int:
+        return len(self._model.ids)
+
+    def constants(self) -> tuple[FloatArray, FloatArray]:
+        return self._model.masses.copy(), self._model.radii.copy()
+
+    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        return self._model.writer().read_internal(positions=positions)
+
+    def write_internal_velocities(self, velocities: FloatArray) -> None:
+        self._model.writer().write_internal_velocities(velocities)
 
 
 class RigidContacts:
@@ -28,15 +61,17 @@ class RigidContacts:
 
     record_impacts: keep an :class:`~perga.model.records.Impact` per granule-hammer impact;
     track_energy: measure the contacts' dissipation (two ``pymunk.batch`` body reads and one
-    arbiter read per step, no Python callback).
+    arbiter read per step, no Python callback). Per granule row: ``ids`` (persistent numbers),
+    ``masses`` (kg), ``radii`` (m).
     """
 
     def __init__(
         self, machine: Machine, *, record_impacts: bool = True, track_energy: bool = True
     ) -> None:
+        spec = machine.spec
         self.machine = machine
-        self.bodies = attach_bodies(machine)
-        self.granule_dt = machine.spec.granule_dt
+        self.bodies = attach_bodies(machine, spec.granule_materials)
+        self.granule_dt = spec.granule_dt
         outline = OutlineFilter(machine)  # hammers of several pieces: their outline's contacts
         if outline:
             self.bodies.listen("pre_solve", outline.pre_solve, ("granule", "hammer"))
@@ -44,16 +79,43 @@ class RigidContacts:
             ImpactRecorder(self.bodies, filtered=bool(outline)) if record_impacts else None
         )
         self.arbiters = ArbiterMeter(machine) if track_energy else None
+        self.releases: list[Release] = []
+        self.ids = np.arange(len(spec.granules), dtype=np.int64)
+        self.masses = np.array([g.mass for g in spec.granules], dtype=float)
+        self.radii = np.array([g.radius for g in spec.granules], dtype=float)
+        self._moments = np.array([g.moment if g.rolls else 0.0 for g in spec.granules])
+        self._bonds: dict[int, tuple[FloatArray, float]] = {}
+        """Held granules by id: their cell (internal units) and bond force (N)."""
+        self._bond_loss = 0.0  # J
         self._reader: GranuleReader | None = None
         self._writer: GranuleWriter | None = None
+        self._kinematics = _Kinematics(self)
+        self._dt = spec.machine_dt
+        self._gravity = np.asarray(spec.gravity, dtype=float)
+        self._x0 = np.array([g.position for g in spec.granules], dtype=float).reshape(-1, 2)
+        self._energy0 = self._energies(self.granule_state())
+        self._kinetic0 = float(self._energy0.sum())
+        self._gone = LedgerTerms()  # the terms of granules removed, frozen at their removal
+        self._inflow = 0.0
+        for id_, (g, body) in enumerate(
+            zip(spec.granules, self.bodies.granule_bodies, strict=True)
+        ):
+            if g.bond_force is not None:
+                self._hold(id_, body, g.bond_force)
+
+    # --- the protocol ------------------------------------------------------------------------
 
     @property
     def impacts(self) -> list[Impact]:
         """Impacts recorded so far (empty if recording is off)."""
         return [] if self.recorder is None else self.recorder.impacts
 
-    def kinematics(self) -> GranuleWriter:
+    def kinematics(self) -> _Kinematics:
         """The granule bodies' velocities, read and written in one ``pymunk.batch`` pass each."""
+        return self._kinematics
+
+    def writer(self) -> GranuleWriter:
+        """The batch writer of the granules present (rebuilt after a change)."""
         if self._writer is None:
             self._writer = GranuleWriter(self.machine.space, self.bodies.granule_bodies)
         return self._writer
@@ -67,22 +129,153 @@ class RigidContacts:
             self.arbiters.before_step()
 
     def after_machine_step(self, time: float) -> float:
-        """The step's dissipation from the arbiters; returns their angular impulse about the axis
-        on the rotor-driven bodies, internal units."""
+        """Release the held granules whose bond is overloaded; the step's dissipation from the
+        arbiters; returns their angular impulse about the axis on the rotor-driven bodies,
+        internal units."""
+        if self._bonds:
+            self._hold_or_release(time)
         return 0.0 if self.arbiters is None else self.arbiters.after_step()
 
     def energy_terms(self) -> LedgerTerms:
-        """The contacts' dissipation, J (the granules' other terms are the machine meter's)."""
-        if self.arbiters is None:
-            return LedgerTerms()
-        return LedgerTerms(contact_dissipation=self.arbiters.dissipated * u.ENERGY)
+        """The granules' kinetic energy, gravity's work on them, what fed and removed granules
+        brought and took, and the contacts' dissipation, J."""
+        state = self.granule_state()
+        energies = self._energies(state)
+        present = LedgerTerms(
+            kinetic=float(energies.sum()),
+            kinetic_initial=self._kinetic0,
+            moved=0.5 * float(np.abs(energies - self._energy0).sum()),
+            gravity_work=self._gravity_work(state),
+            contact_dissipation=self._bond_loss
+            + (0.0 if self.arbiters is None else self.arbiters.dissipated * u.ENERGY),
+            inflow=self._inflow,
+        )
+        return present + self._gone
 
     def granule_state(self) -> GranuleState:
-        """Positions, velocities and spins now, SI (one ``pymunk.batch`` read)."""
+        """The granules now, SI (one ``pymunk.batch`` read)."""
         if self._reader is None:
             self._reader = GranuleReader(self.machine.space, self.bodies.granule_bodies)
-        return self._reader.read()
+        p, v, w = self._reader.read()
+        held = np.isin(self.ids, list(self._bonds)) if self._bonds else np.zeros(len(p), bool)
+        return GranuleState(
+            p,
+            v,
+            w,
+            self.ids.copy(),
+            self.radii.copy(),
+            self.masses.copy(),
+            self._moments.copy(),
+            held,
+        )
 
     def contact_counts(self) -> None:
         """Impulses have no overlap: None."""
         return None
+
+    def add_granules(self, granules: Sequence[GranuleSpec], ids: Sequence[int]) -> None:
+        """Add granules with these ids (held ones in their cells)."""
+        for g, id_ in zip(granules, ids, strict=True):
+            body = self.bodies.add_granule(g, int(id_))
+            if g.bond_force is not None:
+                self._hold(int(id_), body, g.bond_force)
+        new = list(granules)
+        self.ids = np.append(self.ids, np.asarray(ids, dtype=np.int64))
+        self.masses = np.append(self.masses, [g.mass for g in new])
+        self.radii = np.append(self.radii, [g.radius for g in new])
+        self._moments = np.append(self._moments, [g.moment if g.rolls else 0.0 for g in new])
+        self._x0 = np.vstack([self._x0, np.array([g.position for g in new]).reshape(-1, 2)])
+        energy = np.array(
+            [
+                0.5 * g.mass * (g.velocity[0] ** 2 + g.velocity[1] ** 2)
+                + 0.5 * (g.moment if g.rolls else 0.0) * g.angular_velocity**2
+                for g in new
+            ]
+        )
+        self._energy0 = np.append(self._energy0, energy)
+        self._inflow += float(energy.sum())
+        self._changed()
+
+    def remove_granules(self, ids: Sequence[int]) -> None:
+        """Take these granules out, booking their energy and gravity's work on them."""
+        rows = np.flatnonzero(np.isin(self.ids, np.asarray(ids, dtype=np.int64)))
+        if rows.size == 0:
+            return
+        state = self.granule_state()
+        energies = self._energies(state)
+        keep = np.ones(len(self.ids), dtype=bool)
+        keep[rows] = False
+        gone = LedgerTerms(
+            moved=0.5 * float(np.abs(energies[rows] - self._energy0[rows]).sum()),
+            gravity_work=float(
+                np.sum(
+                    self.masses[rows] * ((state.positions[rows] - self._x0[rows]) @ self._gravity)
+                )
+            ),
+            outflow=float(energies[rows].sum()),
+        )
+        self._gone = self._gone + gone
+        for id_ in self.ids[rows]:
+            self._bonds.pop(int(id_), None)
+        self.bodies.remove_granules([int(r) for r in rows])
+        for name in ("ids", "masses", "radii", "_moments", "_x0", "_energy0"):
+            setattr(self, name, getattr(self, name)[keep])
+        self._changed()
+
+    # --- internals ---------------------------------------------------------------------------
+
+    def _changed(self) -> None:
+        self._reader = self._writer = None
+
+    def _energies(self, state: GranuleState) -> FloatArray:
+        v2 = np.sum(state.velocities**2, axis=1)
+        return 0.5 * state.masses * v2 + 0.5 * state.inertia * state.angular_velocities**2
+
+    def _gravity_work(self, state: GranuleState) -> float:
+        return float(np.sum(self.masses * ((state.positions - self._x0) @ self._gravity)))
+
+    def _hold(self, id_: int, body: pymunk.Body, bond_force: float) -> None:
+        """Hold ``body`` in its cell where it is, with a bond of ``bond_force`` (N)."""
+        self._bonds[id_] = (np.array(body.position, dtype=float), bond_force)
+
+    def _hold_or_release(self, time: float) -> None:
+        """Set the held granules back at rest in their cells, or release those whose bond the
+        step overloaded (module doc); book the kinetic energy the bonds took.
+
+        "At rest" is the velocity that brings a granule back to its cell over the next step,
+        (cell − x)/dt (Chipmunk moves bodies before it applies gravity and impulses; 0 unless
+        the granule moved), so that held granules do not creep and one batch write of
+        velocities does.
+        """
+        writer = self.writer()
+        v, x = writer.read_internal(positions=True)
+        assert x is not None
+        held = [(int(np.flatnonzero(self.ids == id_)[0]), id_) for id_ in self._bonds]
+        rows = np.array([row for row, _ in held], dtype=np.intp)
+        cells = np.array([self._bonds[id_][0] for _, id_ in held]).reshape(-1, 2)
+        bonds = np.array([self._bonds[id_][1] for _, id_ in held])
+        mass = self.masses[rows]
+        speed = np.hypot(*(v[rows] * u.VELOCITY).T)
+        force = mass * speed / self._dt
+        kept = force <= bonds
+        rest = (cells - x[rows]) / (self._dt / u.TIME)
+        new = v[rows].copy()
+        new[kept] = rest[kept]
+        broken = ~kept
+        share = np.where(broken, 1.0 - bonds * self._dt / np.maximum(mass * speed, 1e-300), 1.0)
+        new[broken] = v[rows][broken] * share[broken, None]
+        before = 0.5 * mass * speed**2
+        after = 0.5 * mass * np.sum((new * u.VELOCITY) ** 2, axis=1)
+        self._bond_loss += float(np.sum(before - after))
+        v[rows] = new
+        writer.write_internal_velocities(v)
+        for (row, id_), b, f in zip(held, broken, force, strict=True):
+            if b:
+                del self._bonds[id_]
+                self.releases.append(Release(time, id_, float(f)))
+            elif self._moments[row] > 0.0:
+                body = self.bodies.granule_bodies[row]
+                if body.angular_velocity != 0.0:
+                    w = body.angular_velocity * u.ANGULAR_VELOCITY
+                    self._bond_loss += 0.5 * self._moments[row] * w**2
+                    body.angular_velocity = 0.0

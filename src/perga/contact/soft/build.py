@@ -22,9 +22,38 @@ from perga.model.spec import SceneSpec, SoftContactSpec
 
 
 def _radius_of(spec: SceneSpec, material: str) -> float:
-    """Mean radius of the granules of ``material``, m (inf for the wall: a flat partner)."""
-    radii = [g.radius for g in spec.granules if g.material == material]
-    return float(np.mean(radii)) if radii else math.inf
+    """The radius of the granules of ``material`` (one per material: ``granule_radii``), m (inf
+    for a wall: a flat partner)."""
+    return granule_radii(spec).get(material, math.inf)
+
+
+def granule_radii(spec: SceneSpec) -> dict[str, float]:
+    """The one radius of each granule material, m. Hertz stiffness k √R* is tabled per material
+    pair, so a Hertz scene needs one radius per material: more is refused."""
+    radii: dict[str, set[float]] = {}
+    for g in spec.granules:
+        radii.setdefault(g.material, set()).add(g.radius)
+    feed = spec.process.feed
+    if feed is not None:
+        radii.setdefault(feed.material, set()).update(feed.sizes.quantiles)
+    for material, values in radii.items():
+        if len(values) > 1:
+            raise ValueError(
+                f"Hertz contacts take one granule radius per material; {material!r} has "
+                f"{len(values)} (from {min(values):.4g} to {max(values):.4g} m): use the "
+                f"'linear' model or one size"
+            )
+    return {material: values.pop() for material, values in radii.items()}
+
+
+def granule_table_materials(spec: SceneSpec) -> list[str]:
+    """The granule table's materials: those of the granules present and fed, sorted, then a
+    round chamber's."""
+    materials = sorted(spec.granule_materials)
+    chamber_wall = spec.chamber is not None and spec.chamber.outline is None
+    if chamber_wall and spec.chamber.material not in materials:
+        materials.append(spec.chamber.material)
+    return materials
 
 
 def _stiffness(spec: SceneSpec, a: str, b: str) -> float:
@@ -74,7 +103,7 @@ def polygon_table(
     assert isinstance(soft, SoftContactSpec)
     shape = (len(materials), len(polygon_materials))
     e, f = np.ones(shape), np.zeros(shape)
-    granule_materials = {g.material for g in spec.granules}
+    granule_materials = spec.granule_materials
     for i, a in enumerate(materials):
         for j, b in enumerate(polygon_materials):
             if a in granule_materials:
@@ -97,11 +126,9 @@ def soft_granules(
     ``spec.granule_dt``, with a round chamber wall (the kernel's circle) and the ``polygons``
     (hammers and a drawn wall: a posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose
     ``mat`` indexes ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
-    materials = sorted({g.material for g in spec.granules})
+    materials = granule_table_materials(spec)
     walls = []
     if spec.chamber is not None and spec.chamber.outline is None:
-        if spec.chamber.material not in materials:
-            materials.append(spec.chamber.material)
         walls.append(chamber(spec.chamber.radius, mat=materials.index(spec.chamber.material)))
     g = spec.granules
     return SoftGranules(
@@ -119,4 +146,6 @@ def soft_granules(
         polygon_table=polygon_table(spec, materials, polygon_materials),
         threads=None if len(g) >= THREADED_FROM else 1,
         pairs=spec.granule_collisions,
+        held=np.array([x.bond_force is not None for x in g], dtype=bool),
+        bond_force=np.array([math.inf if x.bond_force is None else x.bond_force for x in g]),
     )

@@ -15,7 +15,7 @@ from perga.contact.soft.laws import (
     P_KT,
     contact_duration,
 )
-from perga.contact.soft.neighbours import build, default_skin, empty_list
+from perga.contact.soft.neighbours import build, default_skin, empty_list, remap
 from perga.contact.soft.polygon_forces import contact_energy
 from perga.contact.soft.polygon_set import (
     FREE,
@@ -48,6 +48,13 @@ def plane(point: tuple[float, float], normal: tuple[float, float], mat: int = 0)
     return np.array([kernel.WALL_PLANE, point[0], point[1], nx / norm, ny / norm, mat], dtype=float)
 
 
+def _held(a, n: int) -> np.ndarray:
+    out = np.ascontiguousarray(np.asarray(a, dtype=bool).astype(np.int8))
+    if out.shape != (n,):
+        raise ValueError(f"held must have shape ({n},), got {out.shape}")
+    return out
+
+
 def _f64(a, shape) -> np.ndarray:
     out = np.ascontiguousarray(np.array(a, dtype=np.float64))
     if out.shape != shape:
@@ -69,6 +76,10 @@ class SoftGranules:
     table's rows.
     pairs: False leaves granule-granule contacts out entirely (no neighbour list, no pair loop:
     granules pass through each other, as in a scene without granule collisions).
+    held (n,) bool and bond_force (n,), N: granules held in the comb and the force that breaks
+    each one's bond (``kernel`` module doc); ``released_step`` (n,) is −1 until a granule is
+    released, then the number of the step that released it (``steps`` counts the steps taken),
+    ``release_force`` (n,) the force that did, N.
 
     The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
     moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
@@ -98,6 +109,8 @@ class SoftGranules:
         polygons: PolygonSet | None = None,
         polygon_table: ContactTable | None = None,
         pairs: bool = True,
+        held=None,
+        bond_force=None,
     ) -> None:
         self.x = _f64(x, np.shape(x))
         n = self.x.shape[0]
@@ -136,11 +149,17 @@ class SoftGranules:
         self._no_polygons = no_polygons()
         self.polygon_hist = np.zeros((n, self._poly[0].n_poly, HIST_COLUMNS))
         self.dissipated = np.zeros(3)
+        self.held = np.zeros(n, np.int8) if held is None else _held(held, n)
+        self.bond_force = np.full(n, math.inf) if bond_force is None else _f64(bond_force, (n,))
+        self.released_step = np.full(n, -1, np.int64)
+        self.release_force = np.full(n, math.nan)
+        self.steps = 0
         self.pairs = bool(pairs)
         self.gravity = _f64(gravity, (2,))
         self.v_max = float(v_max)
         self.t_c = self.shortest_contact_duration()
         self.dt = float(dt) if dt is not None else dt_fraction * self.t_c
+        self._default_skin = skin is None
         self.skin = default_skin(self.r) if skin is None else float(skin)
         self.threads = numba.get_num_threads() if threads is None else int(threads)
         self.f = np.zeros((n, 2))
@@ -225,6 +244,81 @@ class SoftGranules:
                     out.append(contact.impact(self.v_max).duration)
         return out
 
+    _ROWS = (
+        "x", "v", "w", "r", "m", "inertia", "mat", "held", "bond_force", "released_step",
+        "release_force", "f", "tq", "a_prev", "x_ref", "wall_hist", "polygon_hist",
+    )  # fmt: skip
+    """The per-granule arrays (first axis: granule), which ``add`` and ``remove`` resize."""
+
+    def add(
+        self, x, r, m, *, mat, v=None, w=None, inertia=None, held=None, bond_force=None
+    ) -> None:
+        """Append granules (arguments as the constructor's, for the new granules only), at rest
+        unless v, w are given; contacts and their histories between the others are kept."""
+        x = np.asarray(x, dtype=float).reshape(-1, 2)
+        k = x.shape[0]
+        r, m = _f64(r, (k,)), _f64(m, (k,))
+        if not (np.all(r > 0) and np.all(m > 0)):
+            raise ValueError("radii and masses must be > 0")
+        mat = np.asarray(mat, dtype=np.int32).reshape(k)
+        if mat.size and (mat.min() < 0 or mat.max() >= self.params.shape[0]):
+            raise ValueError("a material index is outside the parameter table")
+        new = {
+            "x": x,
+            "v": np.zeros((k, 2)) if v is None else _f64(v, (k, 2)),
+            "w": np.zeros(k) if w is None else _f64(w, (k,)),
+            "r": r,
+            "m": m,
+            "inertia": 0.5 * m * r**2 if inertia is None else _f64(inertia, (k,)),
+            "mat": mat,
+            "held": np.zeros(k, np.int8) if held is None else _held(held, k),
+            "bond_force": np.full(k, math.inf) if bond_force is None else _f64(bond_force, (k,)),
+            "released_step": np.full(k, -1, np.int64),
+            "release_force": np.full(k, math.nan),
+            "f": np.zeros((k, 2)),
+            "tq": np.zeros(k),
+            "a_prev": np.zeros((k, 3)),
+            "x_ref": x,
+            "wall_hist": np.zeros((k, self.walls.shape[0])),
+            "polygon_hist": np.zeros((k, *self.polygon_hist.shape[1:])),
+        }
+        if self.polygons is not None and self.polygon_table is not None:
+            check_materials(mat, self.polygons, self.polygon_table)
+        n = self.n
+        for name in self._ROWS:
+            old = getattr(self, name)
+            setattr(
+                self, name, np.ascontiguousarray(np.concatenate([old, new[name].astype(old.dtype)]))
+            )
+        self.start = (
+            np.concatenate([self.start, np.full(k, self.start[-1])])
+            if self.start.shape[0] == n + 1
+            else self.start
+        )
+        self._resized()
+
+    def remove(self, rows) -> float:
+        """Remove the granules at ``rows``; returns the elastic energy their contacts stored, J
+        (the energy those contacts take with them). The others keep their contacts."""
+        rows = np.asarray(rows, dtype=np.int64)
+        keep = np.ones(self.n, dtype=bool)
+        keep[rows] = False
+        before = self.contact_energy()
+        self.start, self.nbr, self.hist = remap(self.start, self.nbr, self.hist, keep)
+        for name in self._ROWS:
+            setattr(self, name, np.ascontiguousarray(getattr(self, name)[keep]))
+        self._resized()
+        return before - self.contact_energy()
+
+    def _resized(self) -> None:
+        """After ``add``/``remove``: the accumulator, and the skin if it is the default."""
+        self._acc = kernel.new_accumulator(self.threads, self.n)
+        if self._default_skin and self.n:
+            skin = default_skin(self.r)
+            if skin != self.skin:
+                self.skin = skin
+                self._rebuild = True
+
     def set_threads(self, threads: int) -> None:
         """Use ``threads`` numba threads (force chunks) from the next step on."""
         self.threads = max(int(threads), 1)
@@ -262,6 +356,7 @@ class SoftGranules:
                 numba.set_num_threads(previous)
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
+        self.steps += n_steps
         self.time += n_steps * self.dt
 
     def _bundles(
@@ -278,9 +373,20 @@ class SoftGranules:
             (p.force, p.torque, p.moment),
         )  # fmt: skip
         return (
-            (n_steps, self.dt, self.gravity, self.skin, drag, v_cap, self.pairs, self._rebuild),
+            (
+                n_steps,
+                self.dt,
+                self.gravity,
+                self.skin,
+                drag,
+                v_cap,
+                self.pairs,
+                self._rebuild,
+                self.steps,
+            ),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),
+            (self.held, self.bond_force, self.released_step, self.release_force),
             self.params,
             (self.walls, self.wall_hist),
             polygons,

@@ -45,21 +45,25 @@ def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
 class SoftImpactLog:
     """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
     of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
-    its own); call :meth:`before` before and :meth:`after` after every kernel call.
-    ``hammer_state(h)`` gives hammer h's :class:`~perga.model.records.HammerState` now."""
+    its own); call :meth:`before` before and :meth:`after` after every kernel call, and
+    :meth:`rows_changed` when granules are added or removed. ``hammer_state(h)`` gives hammer
+    h's :class:`~perga.model.records.HammerState` now, ``ids()`` the id of each granule row."""
 
     def __init__(
         self,
         granules: SoftGranules,
         hammer_of: np.ndarray,
         hammer_state: Callable[[int], HammerState],
+        ids: Callable[[], np.ndarray],
     ) -> None:
         self.impacts: list[Impact] = []
         self._g = granules
+        self._ids = ids
         self._hammer_of = hammer_of
         self._hammer_state = hammer_state
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-        self._open: dict[tuple[int, int], _Start] = {}
+        self._open: dict[tuple[int, int], _Start] = {}  # (granule id, polygon)
+        self._ids_before = ids().copy()
         self._x = granules.x.copy()
         self._v = granules.v.copy()
         self._w = granules.w.copy()
@@ -87,11 +91,24 @@ class SoftImpactLog:
     def before(self) -> None:
         """Keep the granules' and polygons' state before a kernel call (starts need it)."""
         g = self._g
-        self._x[:] = g.x
-        self._v[:] = g.v
-        self._w[:] = g.w
+        if self._x.shape != g.x.shape:
+            self._x, self._v, self._w = g.x.copy(), g.v.copy(), g.w.copy()
+        else:
+            self._x[:] = g.x
+            self._v[:] = g.v
+            self._w[:] = g.w
         self._vertices[:] = g.polygons.vertices
         self._com[:] = g.polygons.com
+
+    def rows_changed(self, keep: np.ndarray, added: int) -> None:
+        """Granule rows were removed (``keep``: the old rows that stay) and ``added`` appended:
+        the contacts of removed granules are forgotten."""
+        gone = set(int(i) for i in self._ids_before[~keep]) if (~keep).any() else set()
+        self._open = {key: v for key, v in self._open.items() if key[0] not in gone}
+        self._active = np.vstack(
+            [self._active[keep], np.zeros((added, self._active.shape[1]), dtype=bool)]
+        )
+        self._ids_before = self._ids().copy()
 
     def after(self, time: float, angles: np.ndarray) -> None:
         """Open and close impacts after a kernel call; ``time``: end of the step, s;
@@ -99,11 +116,12 @@ class SoftImpactLog:
         g = self._g
         hist = g.polygon_hist
         active = (hist[:, :, HIST_ACTIVE] != 0.0) & (self._hammer_of >= 0)
+        ids = self._ids()
         for i, k in zip(*np.nonzero(self._active & ~active), strict=True):
-            self._close(int(i), int(k), hist[i, k], angles)
+            self._close(int(i), int(ids[i]), int(k), hist[i, k], angles)
         for i, k in zip(*np.nonzero(active & ~self._active), strict=True):
             angle = angles[self._hammer_of[k]]
-            self._open[(int(i), int(k))] = self._start(int(i), int(k), time, angle)
+            self._open[(int(ids[i]), int(k))] = self._start(int(i), int(k), time, angle)
         self._active = active
 
     def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
@@ -129,8 +147,8 @@ class SoftImpactLog:
             hammer=self._hammer_state(int(self._hammer_of[k])),
         )
 
-    def _close(self, i: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
-        start = self._open.pop((i, k), None)
+    def _close(self, i: int, id_: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
+        start = self._open.pop((id_, k), None)
         if start is None:  # began before the log (not expected: it starts with the run)
             return
         g = self._g
@@ -140,7 +158,7 @@ class SoftImpactLog:
         self.impacts.append(
             Impact(
                 time=start.time,
-                granule=i,
+                granule=id_,
                 hammer=hammer,
                 normal_velocity_before=start.normal_velocity,
                 normal_velocity_after=vn,

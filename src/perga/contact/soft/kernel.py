@@ -7,6 +7,8 @@ which numba compiles as tuples with attribute access):
   accelerations a_prev (n, 3) = (a_x, a_y, α) of the last step;
 * ``GranuleProps``: radii r (n,), masses m (n,), moments of inertia about the centre (n,)
   (m r²/2 for a disc) and materials mat (n,) int32;
+* ``Bonds``: the comb's hold on each granule: held (n,) int8, bond_force (n,) N, and what
+  the kernel writes at a release, released_step (n,) int64 and release_force (n,) N;
 * ``params``: the pair table (n_mat, n_mat, N_PARAMS) of ``perga.contact.soft.laws``;
 * ``Walls``: rows (n_walls, 6) and the tangential history hist (n, n_walls), below;
 * ``Polygons``: ``PolygonArrays``, ``TableArrays``, the contact history (n, n_poly,
@@ -17,7 +19,12 @@ which numba compiles as tuples with attribute access):
 * ``Work``: the per-chunk force accumulator acc (n_chunks, n, 3), the contact forces f (n, 2)
   and torques tq (n,) of the last step, the dissipated energies (3,);
 * ``Settings``: n_steps, dt (s), gravity (2,) m/s², skin (m), drag (1/s), v_cap (m/s), pairs,
-  rebuild.
+  rebuild, first_step (the count of steps before the call).
+
+Bonds (the comb, ``perga.model.process``): a held granule stays where it is, at rest, while the
+force its bond must take, |f + m g| (f the contact force of the step, g gravity), is at most its
+bond_force; in the first step where it is larger the bond breaks (held = 0, released_step the
+step's number, release_force that force) and the granule moves under that same force.
 
 Walls: rows ``[kind, a, b, c, d, mat]``:
 
@@ -106,6 +113,16 @@ class GranuleProps(NamedTuple):
     mat: np.ndarray
 
 
+class Bonds(NamedTuple):
+    """The comb's bonds (module doc): held (n,) int8 (1: held); bond_force (n,), N;
+    released_step (n,) int64 (−1 until released); release_force (n,), N (nan until released)."""
+
+    held: np.ndarray
+    bond_force: np.ndarray
+    released_step: np.ndarray
+    release_force: np.ndarray
+
+
 class Walls(NamedTuple):
     """Walls: rows (n_walls, WALL_COLUMNS) (module doc); hist (n, n_walls): tangential spring
     ξ of each granule-wall contact, m."""
@@ -148,7 +165,8 @@ class Work(NamedTuple):
 
 class Settings(NamedTuple):
     """The call's scalars: n_steps; dt, s; gravity (2,), m/s²; skin, m; drag, 1/s; v_cap, m/s;
-    pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first."""
+    pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first; first_step:
+    the number of steps taken before the call."""
 
     n_steps: int
     dt: float
@@ -158,6 +176,7 @@ class Settings(NamedTuple):
     v_cap: float
     pairs: bool
     rebuild: bool
+    first_step: int
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -328,8 +347,9 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
-    granules, props, params, walls, poly, table, phist, rho, cand, settings, work, x_ref, chunk
-):
+    granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
+    chunk, step,
+):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
     Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
@@ -338,7 +358,8 @@ def _integrate(
     pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
     entry e's load on its polygon and dissipation go to cand.loads[e]
-    (``polygon_forces.add_loads``). The polygon bundles come as arguments, not as a
+    (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each granule (module
+    doc); ``step`` is the step's number. The polygon bundles come as arguments, not as a
     ``Polygons``: a parallel loop takes a named tuple only from an argument or a constructor
     call (numba 0.68); the other bundles are unpacked before the loop (module doc).
     """
@@ -346,6 +367,7 @@ def _integrate(
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
     rows, wall_hist = walls.rows, walls.hist
     acc, f, tq = work.acc, work.f, work.tq
+    held, bond_force, released_step, release_force = bonds
     dt, gravity, drag, v_cap = settings.dt, settings.gravity, settings.drag, settings.v_cap
     cstart, cpoly, ploads = cand.start, cand.polygon, cand.loads
     n = x.shape[0]
@@ -380,6 +402,19 @@ def _integrate(
             f[i, 0] = fx
             f[i, 1] = fy
             tq[i] = t
+            if held[i]:
+                load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
+                if load <= bond_force[i]:
+                    v[i, 0] = 0.0
+                    v[i, 1] = 0.0
+                    w[i] = 0.0
+                    a_prev[i, 0] = 0.0
+                    a_prev[i, 1] = 0.0
+                    a_prev[i, 2] = 0.0
+                    continue
+                held[i] = 0
+                released_step[i] = step
+                release_force[i] = load
             _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
             ex = x[i, 0] - x_ref[i, 0]
             ey = x[i, 1] - x_ref[i, 1]
@@ -404,7 +439,7 @@ def _stale(x, v, x_ref, skin, dt):
 
 
 @njit(cache=True)
-def advance(settings, granules, props, params, walls, polygons, nbrs, work):
+def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
     """Advance settings.n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds),
     the neighbour list after the call and the number of rebuilds.
 
@@ -430,6 +465,7 @@ def advance(settings, granules, props, params, walls, polygons, nbrs, work):
     settings = Settings(*settings)
     granules = Granules(*granules)
     props = GranuleProps(*props)
+    bonds = Bonds(*bonds)
     walls = Walls(*walls)
     polygons = Polygons(*polygons)
     polygons = Polygons(
@@ -481,8 +517,8 @@ def advance(settings, granules, props, params, walls, polygons, nbrs, work):
                 start, nbr, hist, dt, work.acc, lost,
             )  # fmt: skip
         _integrate(
-            granules, props, params, walls, poly, polygons.table, phist, rho, cand, settings, work,
-            x_ref, chunk,
+            granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+            settings, work, x_ref, chunk, settings.first_step + step,
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)

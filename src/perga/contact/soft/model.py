@@ -22,16 +22,20 @@ resistance), not as a balance: the closure stays a real check.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
+
 import numpy as np
 
 from perga.contact.protocol import FloatArray, GranuleState
-from perga.contact.soft.build import soft_granules
+from perga.contact.soft.build import granule_table_materials, soft_granules
 from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.machine import MachinePolygons
 from perga.engine import units as u
 from perga.engine.machine import Machine
-from perga.model.records import Impact, LedgerTerms
+from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.spec import GranuleSpec
 
 ANGULAR_IMPULSE = u.FORCE * u.LENGTH * u.TIME
 """N·m·s per internal angular impulse unit."""
@@ -46,6 +50,9 @@ class _Kinematics:
     @property
     def count(self) -> int:
         return self._g.n
+
+    def constants(self) -> tuple[FloatArray, FloatArray]:
+        return self._g.m.copy(), self._g.r.copy()
 
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
         return self._g.v / u.VELOCITY, self._g.x / u.LENGTH if positions else None
@@ -70,15 +77,26 @@ class SoftContacts:
         self._machine_dt = spec.machine_dt
         self.polygons = MachinePolygons(machine)
         self.granules = soft_granules(spec, self.polygons.polygons, self.polygons.materials)
+        self.materials = granule_table_materials(spec)
+        """The granule-table rows' materials (those of granules present and fed, then a round
+        chamber's)."""
+        self.ids = np.arange(len(spec.granules), dtype=np.int64)
         self.log = (
-            SoftImpactLog(self.granules, self.polygons.hammer_of, machine.hammer_state)
+            SoftImpactLog(
+                self.granules, self.polygons.hammer_of, machine.hammer_state, lambda: self.ids
+            )
             if record_impacts
             else None
         )
         g = self.granules
+        self.releases: list[Release] = []
+        self._reported = np.zeros(g.n, dtype=bool)
         self._x0 = g.x.copy()
         self._granule_energy0 = self._granule_energies()
+        self._kinetic0 = float(self._granule_energy0.sum())
         self._elastic0 = g.contact_energy()
+        self._gone = LedgerTerms()
+        self._inflow = 0.0
         self._moment = 0.0
 
     @property
@@ -100,10 +118,16 @@ class SoftContacts:
         self._moment = moment * self._machine_dt / ANGULAR_IMPULSE
 
     def after_machine_step(self, time: float) -> float:
-        """Open and close impacts; returns the loads' angular impulse about the axis on the
-        rotor-driven hammers over the step, internal units."""
+        """Open and close impacts, report released granules; returns the loads' angular impulse
+        about the axis on the rotor-driven hammers over the step, internal units."""
         if self.log is not None:
             self.log.after(time, np.array([b.angle for b in self.machine.hammer_bodies]))
+        g = self.granules
+        new = np.flatnonzero((g.released_step >= 0) & ~self._reported)
+        for i in new:
+            t = (int(g.released_step[i]) + 1) * self.granule_dt
+            self.releases.append(Release(t, int(self.ids[i]), float(g.release_force[i])))
+        self._reported[new] = True
         return self._moment
 
     def _granule_energies(self) -> FloatArray:
@@ -111,23 +135,88 @@ class SoftContacts:
         return 0.5 * g.m * np.sum(g.v**2, axis=1) + 0.5 * g.inertia * g.w**2
 
     def energy_terms(self) -> LedgerTerms:
-        """The granules' terms since the model was built, J (module doc)."""
+        """The granules' terms since the model was built, J (module doc), with what fed and
+        removed granules brought and took."""
         g = self.granules
         energies = self._granule_energies()
-        return LedgerTerms(
+        present = LedgerTerms(
             kinetic=float(energies.sum()),
-            kinetic_initial=float(self._granule_energy0.sum()),
+            kinetic_initial=self._kinetic0,
             moved=0.5 * float(np.abs(energies - self._granule_energy0).sum()),
             gravity_work=float(np.sum(g.m * ((g.x - self._x0) @ np.asarray(g.gravity)))),
             contact_dissipation=float(np.sum(g.dissipated)),
             elastic=g.contact_energy(),
             elastic_initial=self._elastic0,
+            inflow=self._inflow,
         )
+        return present + self._gone
 
     def granule_state(self) -> GranuleState:
-        """Positions, velocities and spins now, SI (copies of the kernel's arrays)."""
+        """The granules now, SI (copies of the kernel's arrays)."""
         g = self.granules
-        return GranuleState(g.x.copy(), g.v.copy(), g.w.copy())
+        inertia = np.where(np.isfinite(g.inertia), g.inertia, 0.0)
+        return GranuleState(
+            g.x.copy(),
+            g.v.copy(),
+            g.w.copy(),
+            self.ids.copy(),
+            g.r.copy(),
+            g.m.copy(),
+            inertia,
+            g.held.astype(bool),
+        )
+
+    def add_granules(self, granules: Sequence[GranuleSpec], ids: Sequence[int]) -> None:
+        """Append granules numbered ``ids`` to the kernel's arrays (held ones with their bond)."""
+        specs = list(granules)
+        if not specs:
+            return
+        materials = self.materials
+        g = self.granules
+        g.add(
+            np.array([s.position for s in specs], dtype=float),
+            np.array([s.radius for s in specs], dtype=float),
+            np.array([s.mass for s in specs], dtype=float),
+            mat=np.array([materials.index(s.material) for s in specs], dtype=np.int32),
+            v=np.array([s.velocity for s in specs], dtype=float),
+            w=np.array([s.angular_velocity for s in specs], dtype=float),
+            held=np.array([s.bond_force is not None for s in specs]),
+            bond_force=np.array(
+                [math.inf if s.bond_force is None else s.bond_force for s in specs]
+            ),
+        )
+        n = len(specs)
+        self.ids = np.append(self.ids, np.asarray(ids, dtype=np.int64))
+        self._reported = np.append(self._reported, np.zeros(n, dtype=bool))
+        self._x0 = np.vstack([self._x0, g.x[-n:]])
+        energies = self._granule_energies()[-n:]
+        self._granule_energy0 = np.append(self._granule_energy0, energies)
+        self._inflow += float(energies.sum())
+        if self.log is not None:
+            self.log.rows_changed(np.ones(g.n - n, dtype=bool), n)
+
+    def remove_granules(self, ids: Sequence[int]) -> None:
+        """Remove the granules numbered ``ids``, booking what they take (kinetic energy, the
+        elastic energy of their contacts, gravity's work on them)."""
+        rows = np.flatnonzero(np.isin(self.ids, np.asarray(ids, dtype=np.int64)))
+        if rows.size == 0:
+            return
+        g = self.granules
+        energies = self._granule_energies()
+        keep = np.ones(g.n, dtype=bool)
+        keep[rows] = False
+        fall = (g.x[rows] - self._x0[rows]) @ np.asarray(g.gravity)
+        gone = LedgerTerms(
+            moved=0.5 * float(np.abs(energies[rows] - self._granule_energy0[rows]).sum()),
+            gravity_work=float(np.sum(g.m[rows] * fall)),
+            outflow=float(energies[rows].sum()),
+        )
+        elastic = g.remove(rows)
+        self._gone = self._gone + gone + LedgerTerms(outflow=elastic)
+        for name in ("ids", "_reported", "_x0", "_granule_energy0"):
+            setattr(self, name, getattr(self, name)[keep])
+        if self.log is not None:
+            self.log.rows_changed(keep, 0)
 
     def contact_counts(self) -> tuple[np.ndarray, FloatArray]:
         """Per granule, its contacts now and the largest of their overlaps, m."""

@@ -89,6 +89,8 @@ def build(x, r, skin, old_start, old_nbr, old_hist):
     for none); history of pairs present in both lists is copied, new pairs start at 0.
     """
     n = x.shape[0]
+    if n == 0:
+        return np.zeros(1, np.int64), np.empty(0, np.int64), np.empty(0)
     cell, order, cstart, ncx, ncy = _cells(x, r, skin)
     counts = np.zeros(n + 1, np.int64)
     dummy = np.empty(0, np.int64)
@@ -114,6 +116,22 @@ def build(x, r, skin, old_start, old_nbr, old_hist):
     return start, nbr, hist
 
 
+def remap(
+    start: np.ndarray, nbr: np.ndarray, hist: np.ndarray, keep: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The list (start, nbr, hist) without the granules where ``keep`` is False, the others
+    renumbered in order (their pairs and tangential history kept)."""
+    n = keep.shape[0]
+    if start.shape[0] != n + 1:
+        return empty_list(int(keep.sum()))
+    i = np.repeat(np.arange(n), np.diff(start))
+    entry = keep[i] & keep[nbr]
+    index = np.cumsum(keep) - 1
+    counts = np.bincount(index[i[entry]], minlength=int(keep.sum()))
+    new_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return new_start, index[nbr[entry]].astype(np.int64), hist[entry].copy()
+
+
 def empty_list(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A list with no pairs (forces a rebuild): start of zeros, empty nbr and hist."""
     return np.zeros(n + 1, np.int64), np.empty(0, np.int64), np.empty(0)
@@ -124,4 +142,4 @@ def default_skin(r: np.ndarray) -> float:
     return 0.4 * float(np.min(r)) if r.size else 0.0
 
 
-__all__ = ["build", "default_skin", "empty_list"]
+__all__ = ["build", "default_skin", "empty_list", "remap"]

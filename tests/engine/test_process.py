@@ -1,0 +1,203 @@
+"""The separator as a process: breakage against Vogel & Peukert's closed form, the comb's bonds
+released exactly at their threshold (rigid and soft), conservation of granules in a fed run with
+an outlet, and the bundled separator case."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from perga.cli import main
+from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
+from perga.engine import Simulation
+from perga.engine.process import Damage
+from perga.model import GranuleSpec, RotorSpec, SceneSpec
+from perga.model.process import DamageSpec
+from perga.model.records import Impact
+
+ROOT = Path(__file__).resolve().parents[2]
+G = 9.81  # m/s²
+M = 2.0e-4  # kg, a granule
+
+
+def _impact(granule: int, v_n: float) -> Impact:
+    """A granule-hammer impact of normal approach speed v_n (m/s), the rest immaterial."""
+    return Impact(
+        time=0.0, granule=granule, hammer=0, normal_velocity_before=-v_n,
+        normal_velocity_after=0.5 * v_n, tangential_velocity_before=0.0,
+        tangential_velocity_after=0.0, normal_impulse=M * 1.5 * v_n, point=(0.0, 0.0),
+        normal=(1.0, 0.0), granule_energy_gain=0.0, dissipated=0.0, hammer_energy_before=0.0,
+        granule_velocity_before=(0.0, 0.0), hammer_swing_angle_before=0.0,
+        hammer_angular_velocity_before=0.0, specific_energy=0.5 * v_n**2,
+    )  # fmt: skip
+
+
+def test_breakage_probability_and_survival_are_the_master_curve() -> None:
+    """P = 1 − exp(−f·x·(W − W_min)) per impact and survival after k equal impacts
+    exp(−f·x·k·(W − W_min)) = 1 − S (Vogel & Peukert 2003) to 1e-14 (rounding of a product of
+    k factors); impacts below W_min break nothing and are not counted."""
+    f_mat, w_min, x = 2.0, 0.5, 5.0e-3
+    damage = Damage(DamageSpec(f_mat=f_mat, w_min=w_min, action="mark", seed=1))
+    v_n = 20.0
+    w = 0.5 * v_n**2
+    for k in range(1, 6):
+        impact = damage.annotate(_impact(7, v_n), x)
+        assert impact.breakage_probability == pytest.approx(
+            1.0 - math.exp(-f_mat * x * (w - w_min)), rel=1e-14
+        )
+        assert impact.survival == pytest.approx(math.exp(-f_mat * x * k * (w - w_min)), rel=1e-14)
+        assert damage.counted[7] == k
+    soft = damage.annotate(_impact(8, math.sqrt(2 * w_min) * 0.99), x)
+    assert soft.breakage_probability == 0.0 and soft.survival == 1.0
+    assert 8 not in damage.counted and 8 not in damage.broken
+
+
+def test_broken_granules_are_drawn_with_their_probability() -> None:
+    """Of 4000 granules struck once with P = 0.3, the share drawn broken is within 4 standard
+    errors (0.029) of 0.3."""
+    x, w_min, f_mat = 5e-3, 0.0, 1.0
+    v_n = math.sqrt(2.0 * -math.log(0.7) / (f_mat * x))
+    damage = Damage(DamageSpec(f_mat=f_mat, w_min=w_min, action="mark", seed=3))
+    for i in range(4000):
+        assert damage.annotate(_impact(i, v_n), x).breakage_probability == pytest.approx(0.3)
+    assert abs(len(damage.broken) / 4000 - 0.3) < 4 * math.sqrt(0.3 * 0.7 / 4000)
+
+
+def _held_granule_scene(bond: float) -> SceneSpec:
+    """One granule held in its cell under in-plane gravity, nothing else."""
+    granule = GranuleSpec(
+        position=(0.0, 0.1), velocity=(0.0, 0.0), radius=2.5e-3, mass=M, material="bb",
+        bond_force=bond,
+    )  # fmt: skip
+    return SceneSpec(
+        rotor=RotorSpec(omega=0.0, radius=0.02),
+        hammers=(),
+        granules=(granule,),
+        contacts=(),
+        granule_dt=1e-4,
+        gravity=(0.0, -G),
+    )
+
+
+@pytest.mark.parametrize("side", [1.0 + 1e-6, 1.0 - 1e-6])
+def test_rigid_bond_releases_exactly_at_its_threshold(side: float) -> None:
+    """Gravity loads the bond with m·g: a bond 1e-6 stronger holds the granule in its cell
+    for 100 steps (at rest, where it was, to 1e-12 m; the bond's dissipation the closed form to
+    1e-6); one 1e-6 weaker lets it go at the first step, with the force m·g recorded (1e-9: the
+    speed g·dt read back from Chipmunk's units)."""
+    sim = Simulation(_held_granule_scene(side * M * G))
+    sim.run(100 * sim.dt)
+    state = sim.contacts.granule_state()
+    releases = sim.contacts.releases
+    if side > 1.0:
+        assert not releases and state.held[0]
+        assert np.abs(state.positions[0] - (0.0, 0.1)).max() < 1e-12
+        # each step gravity gives it g·dt, which the bond takes back: ½m(g·dt)² per step
+        taken = 100 * 0.5 * M * (G * sim.dt) ** 2
+        assert sim.energy().contact_dissipation == pytest.approx(taken, rel=1e-6)
+    else:
+        assert len(releases) == 1 and not state.held[0]
+        assert releases[0].time == pytest.approx(sim.dt, rel=1e-12)
+        assert releases[0].force == pytest.approx(M * G, rel=1e-9)
+        assert state.velocities[0, 1] < 0.0  # falling
+
+
+def _pair(bond: float) -> SoftGranules:
+    """A held granule (0) and a free one (1) approaching it at 1 m/s along x, linear contact."""
+    row = contact_parameters("linear", 0.7, k_n=1e4, friction=0.3)
+    return SoftGranules(
+        np.array([[0.0, 0.0], [5.2e-3, 0.0]]), np.full(2, 2.5e-3), np.full(2, M),
+        uniform_table(row), v=np.array([[0.0, 0.0], [-1.0, 0.0]]), held=[True, False],
+        bond_force=[bond, math.inf], dt=1e-6,
+    )  # fmt: skip
+
+
+def _contact_forces(g: SoftGranules, steps: int) -> list[float]:
+    """|f| on granule 0 after each of ``steps`` single steps."""
+    out = []
+    for _ in range(steps):
+        g.step(1)
+        out.append(float(np.hypot(*g.f[0])))
+    return out
+
+
+def test_soft_bond_releases_at_the_first_step_its_force_exceeds_the_bond() -> None:
+    """A free granule pushes on a held one: the force rises step by step; the held granule
+    stays put at every step whose contact force is at most its bond and goes at the first
+    whose force exceeds it, with that force recorded (exactly: the kernel's own number)."""
+    peak = max(_contact_forces(_pair(math.inf), 1000))
+    bond = 0.5 * peak
+    g = _pair(bond)
+    forces = _contact_forces(g, 1000)
+    step = int(g.released_step[0])
+    assert step > 0 and g.held[0] == 0
+    assert forces[step - 1] <= bond < forces[step]
+    assert g.release_force[0] == forces[step]
+    before = _pair(bond)
+    _contact_forces(before, step)  # the steps while held: granule 0 did not move
+    assert before.held[0] == 1 and np.all(before.x[0] == 0.0) and np.all(before.v[0] == 0.0)
+
+
+def test_soft_bond_above_the_peak_force_holds() -> None:
+    """A bond 1 % above the largest contact force never breaks: the free granule rebounds."""
+    peak = max(_contact_forces(_pair(math.inf), 1000))
+    g = _pair(1.01 * peak)
+    _contact_forces(g, 1000)
+    assert g.held[0] == 1 and g.released_step[0] == -1 and math.isnan(g.release_force[0])
+    assert g.v[1, 0] > 0.0 and np.all(g.x[0] == 0.0)
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+@pytest.fixture(scope="module")
+def separator_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The bundled separator case, 0.3 s: comb pieces fed, bonds, damage, screen outlet."""
+    out = tmp_path_factory.mktemp("bee-bread") / "run"
+    case = ROOT / "cases" / "bee-bread-separator.toml"
+    args = ["run", str(case), "-o", str(out), "--quiet", "--set", "solver.duration=0.3"]
+    assert main(args) == 0
+    return out
+
+
+def test_fed_run_conserves_granules_and_counts_what_left(separator_run: Path) -> None:
+    """fed = present + departed + removed broken (the runner checks it at every frame and
+    stops otherwise); outflow.csv has one row per departure and the last frame of
+    granules.csv holds the granules present; the ledger closes to 1 %."""
+    summary = json.loads((separator_run / "summary.json").read_text())
+    assert summary["status"] == "completed", summary
+    pop = summary["population"]
+    assert pop["fed"] > 9 and pop["released"] > 0 and pop["departed"] > 0
+    assert pop["fed"] == pop["present"] + pop["departed"] + pop["removed_broken"]
+    outflow = _rows(separator_run / "outflow.csv")
+    assert len(outflow) == pop["departed"]
+    assert len({r["granule"] for r in outflow}) == len(outflow)
+    granules = _rows(separator_run / "granules.csv")
+    last = max(float(r["time"]) for r in granules)
+    assert sum(float(r["time"]) == last for r in granules) == pop["present"]
+    releases = _rows(separator_run / "releases.csv")
+    assert len(releases) == pop["released"]
+    assert all(float(r["force"]) > 0.02 for r in releases)  # the case's detachment force
+    assert abs(summary["energy"]["closure"]) < 0.01
+
+
+def test_impacts_carry_specific_energy_and_breakage(separator_run: Path) -> None:
+    """Every impact's W = ½v_n² and P from the master curve with the granule's diameter, to
+    1e-9 (CSV round trip)."""
+    impacts = _rows(separator_run / "impacts.csv")
+    sizes = {r["id"]: 2 * float(r["radius"]) for r in _rows(separator_run / "granules.csv")}
+    assert impacts
+    for r in impacts:
+        w = 0.5 * float(r["normal_velocity_before"]) ** 2
+        assert float(r["specific_energy"]) == pytest.approx(w, rel=1e-9)
+        x = sizes.get(r["granule"])
+        if x is not None:
+            p = 1.0 - math.exp(-2.0 * x * max(w - 0.5, 0.0))
+            assert float(r["breakage_probability"]) == pytest.approx(p, rel=1e-9, abs=1e-15)
