@@ -133,6 +133,12 @@ def _run(args: argparse.Namespace) -> int:
         f"{summary.status}: {summary.steps} steps, {summary.simulated_time:.4g} s simulated in "
         f"{summary.wall_time:.3g} s, {summary.impacts} impacts -> {directory}"
     )
+    pop = summary.population
+    if pop and (pop["fed"] != summary.granules or pop["released"] or pop["departed"]):
+        print(
+            f"granules: {pop['fed']} fed, {pop['released']} released from cells, "
+            f"{pop['departed']} departed, {pop['broken']} broken, {pop['present']} present"
+        )
     for warning in summary.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     return 0
@@ -252,6 +258,77 @@ def _sweep(args: argparse.Namespace) -> int:
         print(
             f"warning: {result.failed} runs failed: their status and reason are in "
             f"{result.path}; --retry-failed runs them again",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _window(args: argparse.Namespace) -> int:
+    from perga.studies.study_file import StudyError
+    from perga.studies.window import in_window, run_window, window_study
+
+    try:
+        window = window_study(
+            args.case,
+            args.set or [],
+            replicates=args.replicates,
+            seed=args.seed,
+            release_target=args.release_target,
+            damage_limit=args.damage_limit,
+        )
+    except StudyError as exc:
+        for problem in exc.problems:
+            print(f"error: {problem}", file=sys.stderr)
+        return 2
+    if args.workers is not None and args.workers < 1:
+        print(f"error: --workers: at least 1 (got {args.workers})", file=sys.stderr)
+        return 2
+    bar = _bar(0, args.quiet)
+
+    def progress(done: int, total: int) -> None:
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    start = time.perf_counter()
+    try:
+        result = run_window(
+            window,
+            args.output,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            retry_failed=args.retry_failed,
+            progress=progress,
+        )
+    except KeyboardInterrupt:
+        bar.close()
+        print(
+            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return 130
+    bar.close()
+    best = result.best.point
+    if best is None:
+        verdict = "no point gave both a release and a damage fraction"
+    else:
+        where = f"{window.axes[0]} = {best.x:.6g}, {window.axes[1]} = {best.y:.6g}"
+        verdict = (
+            f"best {where}" if result.best.inside else f"no setting meets both; nearest {where}"
+        )
+    inside = sum(in_window(p, window.release_target, window.damage_limit) for p in result.points)
+    print(
+        f"{len(result.rows)} runs ({result.ran} run now, {result.reused} found finished, "
+        f"{result.failed} failed) in {time.perf_counter() - start:.1f} s; {inside} of "
+        f"{len(result.points)} points in the window; {verdict} "
+        f"-> {args.output}/report.md, window.parquet, window.png"
+    )
+    if result.failed:
+        print(
+            f"warning: {result.failed} runs failed: their status and reason are in "
+            f"{args.output}/results.parquet; --retry-failed runs them again",
             file=sys.stderr,
         )
         return 1
@@ -400,6 +477,36 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--retry-failed", action="store_true", help="run failed runs again")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(handler=_sweep)
+    window = sub.add_parser(
+        "window",
+        help="operating window over two keys on Dask: release, damage, throughput, energy/kg",
+        description="Run a case over a grid of two keys (--set KEY=LO:HI:N twice; other --set "
+        "KEY=VALUE are fixed), each point --replicates times with its own solver.seed, and map "
+        "the mean and sd of released_fraction, damaged_fraction, throughput and energy_per_kg: "
+        "window.parquet/.csv, window.png and report.md with the best setting inside "
+        "released_fraction >= --release-target and damaged_fraction <= --damage-limit.",
+    )
+    window.add_argument("case", type=Path, metavar="CASE")
+    window.add_argument("-o", "--output", type=Path, required=True, help="the study's folder")
+    window.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUES",
+        help="an axis KEY=LO:HI:N (exactly two), or a fixed KEY=VALUE",
+    )
+    window.add_argument("--replicates", type=int, default=2, help="runs per point (default 2)")
+    window.add_argument(
+        "--release-target", type=float, default=0.9, help="least released fraction, in [0, 1]"
+    )
+    window.add_argument(
+        "--damage-limit", type=float, default=0.05, help="most damaged fraction, in [0, 1]"
+    )
+    window.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
+    window.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
+    window.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    window.add_argument("--retry-failed", action="store_true", help="run failed runs again")
+    window.add_argument("--quiet", action="store_true", help="no progress bar")
+    window.set_defaults(handler=_window)
     calibrate = sub.add_parser(
         "calibrate",
         help="fit case keys to measured data (least squares or Bayesian) on Dask",

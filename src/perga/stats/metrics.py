@@ -6,7 +6,9 @@ A metric is asked for by name, with an argument after a colon where it takes one
 that a run cannot give raises :class:`MetricUnavailableError` with the reason (no impact recorded,
 a table the run did not write, a time past the run's end). Metrics are the statistics of
 :mod:`perga.stats.energy` and :mod:`perga.stats.trajectory`, the functions ``perga compare``
-uses, read for one granule (granule 0 unless said otherwise).
+uses, read for one granule (granule 0 unless said otherwise). The process metrics
+(``released_fraction``, ``damaged_fraction``, ``throughput``, ``energy_per_kg``) are of the whole
+run: summary.json's ``population`` and ``energy``, impacts.csv's ``survival`` and outflow.csv.
 
 Impact conventions (impacts.csv, :class:`perga.model.records.Impact`): velocities of the
 granule's contact point relative to the hammer's, normal v_n (< 0 approaching) and tangential
@@ -25,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from perga.stats.energy import impact_stats
-from perga.stats.tables import Run
+from perga.stats.tables import FloatArray, Run, read_table
 
 
 class MetricUnavailableError(Exception):
@@ -155,6 +157,80 @@ def ledger_closure(run: Run, _: float | None = None) -> float:
     return float(energy["closure"])
 
 
+def _population(run: Run) -> dict[str, float]:
+    """summary.json's granule counts (fed, released, departed, broken, removed_broken,
+    present), with at least one granule fed."""
+    population = run.summary.get("population")
+    if not isinstance(population, dict) or "fed" not in population:
+        raise MetricUnavailableError(
+            "the run did not count its granules (summary.json: population)"
+        )
+    if not population["fed"] > 0:
+        raise MetricUnavailableError("no granule was fed (population.fed = 0)")
+    return population
+
+
+def _outflow_mass(run: Run) -> FloatArray:
+    """outflow.csv's ``mass`` column: each granule that left through the outlet, kg."""
+    path = run.directory / "outflow.csv"
+    if not path.exists():
+        raise MetricUnavailableError(
+            "the run did not record its outflow (no [outlet], or output.record lacks 'outflow')"
+        )
+    return read_table(path)["mass"]
+
+
+def released_fraction(run: Run, _: float | None = None) -> float:
+    """Granules released from their comb cells over the granules held in them (every granule
+    fed is held when the granules' material has a detachment_force), -."""
+    material = run.case.granules.material
+    if run.case.materials[material].detachment_force is None:
+        raise MetricUnavailableError(
+            f"no granule was held in a cell: material '{material}' has no detachment_force"
+        )
+    population = _population(run)
+    return float(population["released"]) / float(population["fed"])
+
+
+def damaged_fraction(run: Run, _: float | None = None) -> float:
+    """Expected damage: 1 − the mean over the granules fed of each one's expected survival
+    (its last impact's ``survival`` in impacts.csv; 1 without an impact), -."""
+    fed = float(_population(run)["fed"])
+    if "impacts.csv" not in _tables(run):
+        raise MetricUnavailableError("the run did not record impacts (output.record)")
+    if "survival" not in run.impacts:
+        raise MetricUnavailableError("the case has no [damage]: impacts.csv has no survival")
+    granules, survival = run.impacts["granule"], run.impacts["survival"]
+    last: dict[int, float] = {}
+    for g, s in zip(granules.astype(int), survival, strict=True):
+        last[int(g)] = float(s)  # rows in time order: the last one stays
+    if len(last) > fed:
+        raise MetricUnavailableError(
+            f"{len(last)} granules made impacts but population.fed = {fed:g}"
+        )
+    return float(sum(1.0 - s for s in last.values()) / fed)
+
+
+def throughput(run: Run, _: float | None = None) -> float:
+    """Mass through the outlet per second of simulated time (outflow.csv), kg/s."""
+    mass = _outflow_mass(run)
+    t = float(run.summary.get("simulated_time") or 0.0)
+    if not t > 0:
+        raise MetricUnavailableError("the run simulated no time (summary.json: simulated_time)")
+    return float(np.sum(mass)) / t
+
+
+def energy_per_kg(run: Run, _: float | None = None) -> float:
+    """The rotor drive's work over the mass of product that left through the outlet, J/kg."""
+    energy = run.summary.get("energy") or {}
+    if not isinstance(energy, dict) or "drive_work" not in energy:
+        raise MetricUnavailableError("the run did not track energy (output.record lacks 'energy')")
+    out = float(np.sum(_outflow_mass(run)))
+    if not out > 0:
+        raise MetricUnavailableError("no product left through the outlet")
+    return float(energy["drive_work"]) / out
+
+
 METRICS: dict[str, Metric] = {
     m.name: m
     for m in (
@@ -179,6 +255,12 @@ METRICS: dict[str, Metric] = {
         Metric("radius_at", "m", "distance of granule 0 from the axis at time t", radius_at,
                argument="t, s"),
         Metric("ledger_closure", "-", "energy-ledger closure at the end", ledger_closure),
+        Metric("released_fraction", "-", "granules released from comb cells / granules held",
+               released_fraction),
+        Metric("damaged_fraction", "-",
+               "expected damage: 1 − mean expected survival of the granules fed", damaged_fraction),
+        Metric("throughput", "kg/s", "mass through the outlet per simulated second", throughput),
+        Metric("energy_per_kg", "J/kg", "drive work / mass through the outlet", energy_per_kg),
     )
 }  # fmt: skip
 """Every metric by name."""
