@@ -63,6 +63,11 @@ class Impact:
     """The chance this impact broke the granule, 1 − exp(−f_mat·x·(W − W_min)⁺), with damage."""
     survival: float = math.nan
     """The granule's expected survival after this impact, with damage."""
+    peak_force: float = math.nan
+    """The largest normal contact force during the impact, N (soft contacts)."""
+    peak_pressure: float = math.nan
+    """Hertz's peak contact pressure at ``peak_force``, p0 = (2E*/π)·√(δ/R), Pa (soft Hertz
+    contacts; a diagnostic of damage)."""
 
 
 @dataclass(frozen=True)

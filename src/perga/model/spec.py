@@ -368,6 +368,7 @@ class RigidContactSpec:
     (:mod:`perga.contact.rigid`); the granules move with the machine's step (one substep)."""
 
     kind: ClassVar[str] = "rigid"
+    model: ClassVar[str] = "impulse"
     substeps: ClassVar[int] = 1
 
 

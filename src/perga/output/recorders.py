@@ -68,13 +68,15 @@ class PhaseLock:
 class GranuleRecorder(TableRecorder):
     """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed, radius, mass (SI); with
     held granules in the system also ``held`` (1 while in its cell), with damage ``survival``
-    (expected, -) and ``broken`` (1 if drawn broken)."""
+    (expected, -), ``broken`` (1 if drawn broken) and ``damaging_impacts`` (its impacts above
+    W_min: the k of the master curve)."""
 
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.held = spec.has_bonds
         self.damage = spec.process.damage is not None
         columns = ["time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed", "radius"]
-        columns += ["mass"] + ["held"] * self.held + ["survival", "broken"] * self.damage
+        columns += ["mass"] + ["held"] * self.held
+        columns += ["survival", "broken", "damaging_impacts"] * self.damage
         self.table = Table(directory / "granules.csv", columns)
 
     def record(self, frame: Frame, events: Events) -> None:
@@ -96,7 +98,7 @@ class GranuleRecorder(TableRecorder):
         if self.held:
             columns.append(g.held.astype(np.int64))
         if self.damage:
-            columns += [g.survival, g.broken.astype(np.int64)]
+            columns += [g.survival, g.broken.astype(np.int64), g.damaging_impacts]
         self.table.write(zip(*(c.tolist() for c in columns), strict=True))
 
 
@@ -177,8 +179,15 @@ class ImpactRecorder(EventRecorder):
 
     @staticmethod
     def omitted(spec: SceneSpec) -> frozenset[str]:
-        """The breakage columns, unless the scene has damage."""
-        return frozenset() if spec.process.damage else frozenset(DAMAGE_FIELDS)
+        """The breakage columns, unless the scene has damage; the peak force, unless its
+        contacts are soft, and the peak pressure, unless they are Hertz's."""
+        omit = set() if spec.process.damage else set(DAMAGE_FIELDS)
+        model = spec.contact_model.model
+        if model == "impulse":
+            omit |= {"peak_force", "peak_pressure"}
+        elif model != "hertz":
+            omit.add("peak_pressure")
+        return frozenset(omit)
 
 
 class ReleaseRecorder(EventRecorder):

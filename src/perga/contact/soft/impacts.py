@@ -5,7 +5,8 @@ A soft impact lasts many granule steps. Between Pymunk steps the log compares ea
 starts an impact (the granule's state before the Pymunk step, the hammer's kinetic energy, the
 contact normal from the closest feature of the hammer's outline and the relative velocity of
 the contact points), a pair that became inactive completes it (the state after, and the
-kernel's per-contact totals: normal and tangential impulse, energy dissipated). Normal and
+kernel's per-contact totals: normal and tangential impulse, energy dissipated, the peak normal
+force and, for a Hertz contact, the peak pressure it gives, ``hertz_peak_pressure``). Normal and
 tangent turn with the hammer between start and end (they are fixed in the hammer's frame).
 An impact is written when it ends; its ``time`` is the end of the Pymunk step in which it began.
 """
@@ -19,7 +20,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from perga.contact.soft import SoftGranules
-from perga.contact.soft.polygon_set import HIST_ACTIVE, HIST_DISSIPATED, HIST_NORMAL_IMPULSE
+from perga.contact.soft.polygon_set import (
+    HIST_ACTIVE,
+    HIST_DISSIPATED,
+    HIST_NORMAL_IMPULSE,
+    HIST_PEAK_FORCE,
+    LINEAR,
+)
 from perga.geometry.disc_polygon import closest_feature
 from perga.model.records import HammerState, Impact
 
@@ -35,6 +42,17 @@ class _Start:
     granule_energy: float
     granule_velocity: tuple[float, float]
     hammer: HammerState
+
+
+def hertz_peak_pressure(force: float, k_n: float, radius: float) -> float:
+    """Hertz's peak contact pressure, Pa, of a sphere of ``radius`` (m) on a flat under the
+    normal ``force`` (N) of the law F = k_n·√R·δ^{3/2} (k_n = (4/3)E*, Pa): the overlap
+    δ = (F/(k_n√R))^{2/3}, contact radius a = √(Rδ), p0 = 3F/(2πa²) = (2E*/π)·√(δ/R)
+    (Johnson, Contact Mechanics, 1985, §4.2)."""
+    if not force > 0.0:
+        return 0.0
+    delta = (force / (k_n * math.sqrt(radius))) ** (2.0 / 3.0)
+    return 3.0 * force / (2.0 * math.pi * radius * delta)
 
 
 def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
@@ -155,6 +173,14 @@ class SoftImpactLog:
         hammer = int(self._hammer_of[k])
         n = _rotate(start.normal, float(angles[hammer]) - start.hammer_angle)
         vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n, g.polygons.com[k])
+        peak = float(row[HIST_PEAK_FORCE])
+        a, b = int(g.mat[i]), int(g.polygons.mat[k])
+        table = g.polygon_table
+        pressure = (
+            math.nan
+            if table is None or table.law[a, b] == LINEAR
+            else hertz_peak_pressure(peak, float(table.k_n[a, b]), float(g.r[i]))
+        )
         self.impacts.append(
             Impact(
                 time=start.time,
@@ -173,5 +199,7 @@ class SoftImpactLog:
                 granule_velocity_before=start.granule_velocity,
                 hammer_swing_angle_before=start.hammer.swing_angle,
                 hammer_angular_velocity_before=start.hammer.angular_velocity,
+                peak_force=peak,
+                peak_pressure=pressure,
             )
         )

@@ -67,6 +67,7 @@ from perga.contact.soft.polygon_set import (
     HIST_COLUMNS,
     HIST_DISSIPATED,
     HIST_NORMAL_IMPULSE,
+    HIST_PEAK_FORCE,
     HIST_RATE,
     HIST_SLIP,
     HIST_TANGENTIAL_IMPULSE,
@@ -217,6 +218,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
         hist[i, k, HIST_NORMAL_IMPULSE] = 0.0
         hist[i, k, HIST_TANGENTIAL_IMPULSE] = 0.0
         hist[i, k, HIST_DISSIPATED] = 0.0
+        hist[i, k, HIST_PEAK_FORCE] = 0.0
     kd = kind[k]
     if kd == FREE:
         cr = rcx * ny - rcy * nx
@@ -250,6 +252,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     hist[i, k, HIST_NORMAL_IMPULSE] += fn * dt
     hist[i, k, HIST_TANGENTIAL_IMPULSE] += ft * dt
     hist[i, k, HIST_DISSIPATED] += dissipated
+    hist[i, k, HIST_PEAK_FORCE] = max(hist[i, k, HIST_PEAK_FORCE], fn)
     fx = fn * nx + ft * tx
     fy = fn * ny + ft * ty
     return True, fx, fy, -arm * ft, -(rcx * fy - rcy * fx), dissipated

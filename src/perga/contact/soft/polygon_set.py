@@ -25,12 +25,13 @@ History per (granule, polygon) pair: an array (n, n_poly, HIST_COLUMNS) owned by
 * ``HIST_TANGENTIAL_IMPULSE``: Σ F_t dt on the granule along each step's tangent, N·s;
 * ``HIST_DISSIPATED``: energy the contact dissipated since it began, J (``laws.contact_force``;
   a tangential spring dropped at the end counts too);
-* ``HIST_SLIP``: slip rate v_t of the last evaluation, m/s (not extrapolated).
+* ``HIST_SLIP``: slip rate v_t of the last evaluation, m/s (not extrapolated);
+* ``HIST_PEAK_FORCE``: the largest normal force F_n on the granule since the contact began, N.
 
 When a contact ends ``HIST_XI``, ``HIST_ACTIVE``, ``HIST_RATE`` and ``HIST_SLIP`` are reset to 0;
-the three totals are kept until the same pair's next contact begins (they are zeroed at its first
-evaluation), so a caller comparing ``HIST_ACTIVE`` before and after a call reads the totals of
-the contacts that ended.
+the three totals and the peak are kept until the same pair's next contact begins (they are
+zeroed at its first evaluation), so a caller comparing ``HIST_ACTIVE`` before and after a call
+reads the totals of the contacts that ended.
 """
 
 import math
@@ -58,7 +59,8 @@ HERTZ = 1
 HIST_XI, HIST_ACTIVE, HIST_RATE = 0, 1, 2
 HIST_NORMAL_IMPULSE, HIST_TANGENTIAL_IMPULSE, HIST_DISSIPATED = 3, 4, 5
 HIST_SLIP = 6
-HIST_COLUMNS = 7
+HIST_PEAK_FORCE = 7
+HIST_COLUMNS = 8
 """Columns of the (granule, polygon) contact history (module doc)."""
 
 _LAWS = {"linear": LINEAR, "hertz": HERTZ}
