@@ -68,7 +68,7 @@ def test_screen_must_cut_the_wall(tmp_path, capsys, point, ok):
 
 
 def test_damage_needs_the_materials_breakage(tmp_path, capsys):
-    text = _with("breakage = { f_mat = 2.0, w_min = 0.5 }\n", "")
+    text = _with("breakage = { f_mat = 0.1, w_min = 30.0 }\n", "")
     code, err = _validate(tmp_path, text, capsys)
     assert code == 2 and "damage: needs [materials.beebread.breakage]" in err
     code, err = _validate(tmp_path, text.replace('[damage]\naction = "mark"\n', ""), capsys)

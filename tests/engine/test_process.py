@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,9 @@ from perga.model.process import DamageSpec
 from perga.model.records import Impact
 
 ROOT = Path(__file__).resolve().parents[2]
+SEPARATOR = ROOT / "cases" / "bee-bread-separator.toml"
+BEEBREAD = tomllib.loads(SEPARATOR.read_text())["materials"]["beebread"]
+F_MAT, W_MIN = BEEBREAD["breakage"]["f_mat"], BEEBREAD["breakage"]["w_min"]
 G = 9.81  # m/s²
 M = 2.0e-4  # kg, a granule
 
@@ -161,8 +165,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
 def separator_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The bundled separator case, 0.3 s: comb pieces fed, bonds, damage, screen outlet."""
     out = tmp_path_factory.mktemp("bee-bread") / "run"
-    case = ROOT / "cases" / "bee-bread-separator.toml"
-    args = ["run", str(case), "-o", str(out), "--quiet", "--set", "solver.duration=0.3"]
+    args = ["run", str(SEPARATOR), "-o", str(out), "--quiet", "--set", "solver.duration=0.3"]
     assert main(args) == 0
     return out
 
@@ -184,7 +187,7 @@ def test_fed_run_conserves_granules_and_counts_what_left(separator_run: Path) ->
     assert sum(float(r["time"]) == last for r in granules) == pop["present"]
     releases = _rows(separator_run / "releases.csv")
     assert len(releases) == pop["released"]
-    assert all(float(r["force"]) > 0.02 for r in releases)  # the case's detachment force
+    assert all(float(r["force"]) > BEEBREAD["detachment_force"] for r in releases)
     assert abs(summary["energy"]["closure"]) < 0.01
 
 
@@ -199,5 +202,22 @@ def test_impacts_carry_specific_energy_and_breakage(separator_run: Path) -> None
         assert float(r["specific_energy"]) == pytest.approx(w, rel=1e-9)
         x = sizes.get(r["granule"])
         if x is not None:
-            p = 1.0 - math.exp(-2.0 * x * max(w - 0.5, 0.0))
+            p = 1.0 - math.exp(-F_MAT * x * max(w - W_MIN, 0.0))
             assert float(r["breakage_probability"]) == pytest.approx(p, rel=1e-9, abs=1e-15)
+
+
+def test_each_granule_counts_its_damaging_impacts(separator_run: Path) -> None:
+    """granules.csv's last frame: each granule's damaging_impacts is the number of its rows in
+    impacts.csv above W_min, and its survival the product of (1 − P) over them (1e-9)."""
+    impacts = _rows(separator_run / "impacts.csv")
+    granules = _rows(separator_run / "granules.csv")
+    last = max(float(r["time"]) for r in granules)
+    checked = 0
+    for g in (r for r in granules if float(r["time"]) == last):
+        mine = [r for r in impacts if r["granule"] == g["id"] and float(r["time"]) <= last]
+        above = [r for r in mine if float(r["specific_energy"]) > W_MIN]
+        assert int(g["damaging_impacts"]) == len(above)
+        survival = math.prod(1.0 - float(r["breakage_probability"]) for r in mine)
+        assert float(g["survival"]) == pytest.approx(survival, rel=1e-9)
+        checked += len(above) > 1
+    assert checked > 0  # some granule was struck hard more than once

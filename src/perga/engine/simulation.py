@@ -211,6 +211,8 @@ class Simulation:
         material_of = np.asarray(self._material_of, dtype=np.int32)
         survival = np.array([self.survival_of(int(i)) for i in state.ids], dtype=float)
         broken = np.array([self.broken_of(int(i)) for i in state.ids], dtype=bool)
+        counted = self.damage.counted if self.damage is not None else {}
+        damaging = np.array([counted.get(int(i), 0) for i in state.ids], dtype=np.int64)
         granules = GranuleFrame(
             ids=frozen(state.ids),
             radii=frozen(state.radii),
@@ -224,6 +226,7 @@ class Simulation:
             held=frozen(state.held),
             survival=frozen(survival),
             broken=frozen(broken),
+            damaging_impacts=frozen(damaging),
             contacts=None if counts is None else frozen(counts[0]),
             overlap_max=None if counts is None else frozen(counts[1]),
         )

@@ -49,6 +49,7 @@ class GranuleFrame:
     held: NDArray[np.bool_]
     survival: FloatArray
     broken: NDArray[np.bool_]
+    damaging_impacts: NDArray[np.int64]
     contacts: NDArray[np.int32] | None = None
     overlap_max: FloatArray | None = None
 

@@ -8,7 +8,8 @@ a table the run did not write, a time past the run's end). Metrics are the stati
 :mod:`perga.stats.energy` and :mod:`perga.stats.trajectory`, the functions ``perga compare``
 uses, read for one granule (granule 0 unless said otherwise). The process metrics
 (``released_fraction``, ``damaged_fraction``, ``throughput``, ``energy_per_kg``) are of the whole
-run: summary.json's ``population`` and ``energy``, impacts.csv's ``survival`` and outflow.csv.
+run: the comb at t = 0 and the granules at the end (granules.csv), releases.csv, the product
+(outflow.csv), the drive's work (summary.json).
 
 Impact conventions (impacts.csv, :class:`perga.model.records.Impact`): velocities of the
 granule's contact point relative to the hammer's, normal v_n (< 0 approaching) and tangential
@@ -157,58 +158,57 @@ def ledger_closure(run: Run, _: float | None = None) -> float:
     return float(energy["closure"])
 
 
-def _population(run: Run) -> dict[str, float]:
-    """summary.json's granule counts (fed, released, departed, broken, removed_broken,
-    present), with at least one granule fed."""
-    population = run.summary.get("population")
-    if not isinstance(population, dict) or "fed" not in population:
-        raise MetricUnavailableError(
-            "the run did not count its granules (summary.json: population)"
-        )
-    if not population["fed"] > 0:
-        raise MetricUnavailableError("no granule was fed (population.fed = 0)")
-    return population
-
-
-def _outflow_mass(run: Run) -> FloatArray:
-    """outflow.csv's ``mass`` column: each granule that left through the outlet, kg."""
+def _outflow(run: Run) -> dict[str, FloatArray]:
+    """outflow.csv: each granule that left through the outlet (mass, kg; survival, -; ...)."""
     path = run.directory / "outflow.csv"
     if not path.exists():
         raise MetricUnavailableError(
             "the run did not record its outflow (no [outlet], or output.record lacks 'outflow')"
         )
-    return read_table(path)["mass"]
+    return read_table(path)
+
+
+def _outflow_mass(run: Run) -> FloatArray:
+    """outflow.csv's ``mass`` column, kg."""
+    return _outflow(run)["mass"]
 
 
 def released_fraction(run: Run, _: float | None = None) -> float:
-    """Granules released from their comb cells over the granules held in them (every granule
-    fed is held when the granules' material has a detachment_force), -."""
-    material = run.case.granules.material
-    if run.case.materials[material].detachment_force is None:
+    """Of the granules held in their comb cells at t = 0 (granules.csv's first frame), the share
+    released during the run (releases.csv), -. The comb at the start is the same for every
+    setting of a study, whatever the feed adds later."""
+    tables = _tables(run)
+    if "granules.csv" not in tables or "releases.csv" not in tables:
         raise MetricUnavailableError(
-            f"no granule was held in a cell: material '{material}' has no detachment_force"
+            "the run did not record granules and releases (output.record needs both)"
         )
-    population = _population(run)
-    return float(population["released"]) / float(population["fed"])
+    granules = run.granules
+    if "held" not in granules:
+        raise MetricUnavailableError("no granule was held in a comb cell (no detachment_force)")
+    first = granules["time"] == granules["time"][0]
+    held = set(granules["id"][first & (granules["held"] == 1)].astype(int).tolist())
+    if not held:
+        raise MetricUnavailableError("no granule was held in a comb cell at t = 0")
+    released = set(read_table(run.directory / "releases.csv")["granule"].astype(int).tolist())
+    return len(held & released) / len(held)
 
 
 def damaged_fraction(run: Run, _: float | None = None) -> float:
-    """Expected damage: 1 − the mean over the granules fed of each one's expected survival
-    (its last impact's ``survival`` in impacts.csv; 1 without an impact), -."""
-    fed = float(_population(run)["fed"])
-    if "impacts.csv" not in _tables(run):
-        raise MetricUnavailableError("the run did not record impacts (output.record)")
-    if "survival" not in run.impacts:
-        raise MetricUnavailableError("the case has no [damage]: impacts.csv has no survival")
-    granules, survival = run.impacts["granule"], run.impacts["survival"]
-    last: dict[int, float] = {}
-    for g, s in zip(granules.astype(int), survival, strict=True):
-        last[int(g)] = float(s)  # rows in time order: the last one stays
-    if len(last) > fed:
-        raise MetricUnavailableError(
-            f"{len(last)} granules made impacts but population.fed = {fed:g}"
-        )
-    return float(sum(1.0 - s for s in last.values()) / fed)
+    """Expected damage of the granules out of the comb: 1 − the mean expected survival of the
+    granules that left through the outlet (outflow.csv) and of those free in the chamber at the
+    end (granules.csv's last frame, held = 0), -."""
+    if run.case.damage is None:
+        raise MetricUnavailableError("the case has no [damage]")
+    gone = _outflow(run)["survival"]
+    granules = run.granules
+    if not granules or "survival" not in granules:
+        raise MetricUnavailableError("the run did not record granules (output.record)")
+    last = granules["time"] == granules["time"][-1]
+    free = last & (granules["held"] == 0) if "held" in granules else last
+    survival = np.concatenate([gone, granules["survival"][free]])
+    if survival.size == 0:
+        raise MetricUnavailableError("no granule came out of the comb")
+    return float(1.0 - np.mean(survival))
 
 
 def throughput(run: Run, _: float | None = None) -> float:
@@ -255,10 +255,11 @@ METRICS: dict[str, Metric] = {
         Metric("radius_at", "m", "distance of granule 0 from the axis at time t", radius_at,
                argument="t, s"),
         Metric("ledger_closure", "-", "energy-ledger closure at the end", ledger_closure),
-        Metric("released_fraction", "-", "granules released from comb cells / granules held",
-               released_fraction),
+        Metric("released_fraction", "-",
+               "share of the granules held in comb cells at t = 0 released", released_fraction),
         Metric("damaged_fraction", "-",
-               "expected damage: 1 − mean expected survival of the granules fed", damaged_fraction),
+               "expected damage of the granules out of the comb: 1 − their mean survival",
+               damaged_fraction),
         Metric("throughput", "kg/s", "mass through the outlet per simulated second", throughput),
         Metric("energy_per_kg", "J/kg", "drive work / mass through the outlet", energy_per_kg),
     )
