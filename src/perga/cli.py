@@ -8,9 +8,9 @@ from __future__ import annotations
 import argparse
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from perga import __version__
 from perga.case import CaseError, load_case
@@ -147,6 +147,17 @@ def _run(args: argparse.Namespace) -> int:
 def _render(args: argparse.Namespace) -> int:
     from perga.output.render import render
 
+    if args.process:
+        from perga.output.process_figure import process_figure
+
+        out = args.output or args.run / "process.png"
+        try:
+            process_figure(args.run, out)
+        except FileNotFoundError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        print(f"wrote {out}")
+        return 0
     out = args.output or args.run / ("trajectories.png" if args.trajectories else "preview.png")
     try:
         t = render(args.run, out, time=args.time, trajectories=args.trajectories)
@@ -211,6 +222,35 @@ def _study_from_args(args: argparse.Namespace):
     )
 
 
+T = TypeVar("T")
+
+
+def _with_progress(
+    args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]
+) -> T | None:
+    """``call(progress)`` under a progress bar (unless ``args.quiet``); None after Ctrl-C, having
+    said where the finished runs are and how to resume."""
+    bar = _bar(0, args.quiet)
+
+    def progress(done: int, total: int) -> None:
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    try:
+        return call(progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print(
+            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
+            "run the same command again to resume",
+            file=sys.stderr,
+        )
+        return None
+    finally:
+        bar.close()
+
+
 def _sweep(args: argparse.Namespace) -> int:
     from perga.studies.study_file import StudyError
     from perga.studies.sweep import sweep
@@ -222,32 +262,20 @@ def _sweep(args: argparse.Namespace) -> int:
         for problem in exc.problems:
             print(f"error: {problem}", file=sys.stderr)
         return 2
-    bar = _bar(0, args.quiet)
-
-    def progress(done: int, total: int) -> None:
-        bar.total = total
-        bar.n = done
-        bar.refresh()
-
     start = time.perf_counter()
-    try:
-        result = sweep(
+    result = _with_progress(
+        args,
+        lambda progress: sweep(
             study,
             args.output,
             scheduler=args.scheduler,
             workers=args.workers,
             retry_failed=args.retry_failed,
             progress=progress,
-        )
-    except KeyboardInterrupt:
-        bar.close()
-        print(
-            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
-            "run the same command again to resume",
-            file=sys.stderr,
-        )
+        ),
+    )
+    if result is None:
         return 130
-    bar.close()
     plots = write_plots(result.rows, list(study.parameters), study.metrics, args.output)
     print(
         f"{len(result.rows)} runs ({result.ran} run now, {result.reused} found finished, "
@@ -284,32 +312,20 @@ def _window(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         print(f"error: --workers: at least 1 (got {args.workers})", file=sys.stderr)
         return 2
-    bar = _bar(0, args.quiet)
-
-    def progress(done: int, total: int) -> None:
-        bar.total = total
-        bar.n = done
-        bar.refresh()
-
     start = time.perf_counter()
-    try:
-        result = run_window(
+    result = _with_progress(
+        args,
+        lambda progress: run_window(
             window,
             args.output,
             scheduler=args.scheduler,
             workers=args.workers,
             retry_failed=args.retry_failed,
             progress=progress,
-        )
-    except KeyboardInterrupt:
-        bar.close()
-        print(
-            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
-            "run the same command again to resume",
-            file=sys.stderr,
-        )
+        ),
+    )
+    if result is None:
         return 130
-    bar.close()
     best = result.best.point
     if best is None:
         verdict = "no point gave both a release and a damage fraction"
@@ -432,6 +448,10 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("run", type=Path, metavar="RUN", help="a run directory")
     render.add_argument("--time", type=float, help="the frame nearest this time, s (default last)")
     render.add_argument("--trajectories", action="store_true", help="granule paths, by time")
+    render.add_argument(
+        "--process", action="store_true",
+        help="counts, outlet mass flow and survival over time (RUN/process.png)",
+    )  # fmt: skip
     render.add_argument("-o", "--output", type=Path, help="PNG (default RUN/preview.png)")
     render.set_defaults(handler=_render)
     accuracy = sub.add_parser(

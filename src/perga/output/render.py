@@ -24,12 +24,15 @@ from perga.geometry.polygon import outline_or_circle
 from perga.output.scene_file import HammerGeometry, read_scene
 
 
-def _table(path: Path) -> np.ndarray:
-    """A run table as a structured array (names from the header)."""
+def run_table(path: Path) -> np.ndarray:
+    """A run table as a structured array (names from the header; no rows: empty)."""
     if not path.exists():
         raise FileNotFoundError(f"{path}: missing (record it with output.record)")
-    data = np.genfromtxt(path, delimiter=",", names=True)
-    return np.atleast_1d(data)
+    with path.open(encoding="utf-8") as stream:
+        names = stream.readline().strip().split(",")
+        if not stream.read().strip():
+            return np.zeros(0, dtype=[(n, float) for n in names])
+    return np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True))
 
 
 def _hammer_outline(h: HammerGeometry, rotor_angle: float, alpha: float) -> np.ndarray:
@@ -53,8 +56,8 @@ def render(
     """Draw run directory ``run`` into the PNG ``out`` (with a colour bar unless ``colorbar`` is
     False); returns the time of the frame drawn, s."""
     scene = read_scene(run)
-    granules = _table(run / "granules.csv")
-    hammers = _table(run / "hammers.csv")
+    granules = run_table(run / "granules.csv")
+    hammers = run_table(run / "hammers.csv")
     times = np.unique(granules["time"])
     t = times[-1] if time is None else times[np.argmin(np.abs(times - time))]
     fig = Figure(figsize=(7, 7), dpi=120)  # no pyplot: no GUI backend, no global state
@@ -77,10 +80,9 @@ def render(
             alpha = float(frame["swing_angle"][frame["id"] == i][0])
             polys.append(Polygon(_hammer_outline(h, rotor_angle, alpha), closed=True))
     ax.add_collection(PatchCollection(polys, facecolor="0.55", edgecolor="0.2"))
-    radius = scene.granule_radii
     if trajectories:
         lines, stamps = [], []
-        for i in range(len(radius)):
+        for i in np.unique(granules["id"]):
             path = granules[granules["id"] == i]
             xy = np.column_stack([path["x"], path["y"]])
             lines += list(np.stack([xy[:-1], xy[1:]], axis=1))
@@ -93,10 +95,7 @@ def render(
     else:
         now = granules[granules["time"] == t]
         discs = PatchCollection(
-            [
-                Circle((x, y), radius[int(i)])
-                for x, y, i in zip(now["x"], now["y"], now["id"], strict=True)
-            ],
+            [Circle((x, y), r) for x, y, r in zip(now["x"], now["y"], now["radius"], strict=True)],
             array=now["speed"],
             cmap="plasma",
         )

@@ -81,7 +81,10 @@ def granule_energy(run: Run, granule: int, t: float, before: bool = True) -> flo
         else int(np.searchsorted(times, t, side="right"))
     )
     i = min(max(i, 0), times.size - 1)
-    m, r = run.case.granule_mass, run.case.granules.radius
+    if "mass" in track:  # each granule's own (granules.csv since sizes vary)
+        m, r = float(track["mass"][i]), float(track["radius"][i])
+    else:
+        m, r = run.case.granule_mass, run.case.granules.radius
     spin_inertia = 0.5 * m * r**2 if run.case.granules.rolls else 0.0
     return 0.5 * m * float(track["speed"][i]) ** 2 + 0.5 * spin_inertia * float(
         track["angular_velocity"][i] ** 2
