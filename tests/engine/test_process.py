@@ -16,9 +16,9 @@ import pytest
 from perga.cli import main
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
 from perga.engine import Simulation
-from perga.engine.process import Damage
+from perga.engine.process import Damage, Feed
 from perga.model import GranuleSpec, RotorSpec, SceneSpec
-from perga.model.process import DamageSpec
+from perga.model.process import DamageSpec, FeedSpec, Sizes
 from perga.model.records import Impact
 from perga.output.process_figure import mass_flow
 
@@ -71,6 +71,26 @@ def test_broken_granules_are_drawn_with_their_probability() -> None:
     for i in range(4000):
         assert damage.annotate(_impact(i, v_n), x).breakage_probability == pytest.approx(0.3)
     assert abs(len(damage.broken) / 4000 - 0.3) < 4 * math.sqrt(0.3 * 0.7 / 4000)
+
+
+def _feed(rate: float, start: float, stop: float, total: int | None) -> Feed:
+    spec = FeedSpec(
+        rate=rate, start=start, stop=stop, total=total, region=((0.0, 0.0), (0.01, 0.01), 0.0),
+        velocity=(0.0, 0.0), piece=((0.0, 0.0),), sizes=Sizes((0.002,), (1.0,), True),
+        areal_density=1.0, mass=None, material="bb", rolls=True, bond_force=None, seed=0,
+    )  # fmt: skip
+    return Feed(spec)
+
+
+def test_feed_schedule() -> None:
+    """⌊rate·(t − start)⌋ + 1 items by t from start on (one at start itself), none before
+    start, no more after stop, at most total."""
+    feed = _feed(rate=100.0, start=0.01, stop=0.05, total=None)
+    assert [feed.due(t) for t in (0.0, 0.0099, 0.01, 0.0199, 0.02, 0.05, 1.0)] == [
+        0, 0, 1, 1, 2, 5, 5
+    ]  # fmt: skip
+    capped = _feed(rate=100.0, start=0.0, stop=math.inf, total=3)
+    assert [capped.due(t) for t in (0.0, 0.011, 0.021, 0.5)] == [1, 2, 3, 3]
 
 
 def _held_granule_scene(bond: float) -> SceneSpec:
