@@ -58,6 +58,8 @@ class RunSummary:
     """Granules: fed (those at t = 0 included), released from cells, departed through the
     outlet, broken (drawn), removed broken, present at the end."""
     energy: dict[str, float] = field(default_factory=dict)
+    threads: int = 1
+    """CPU threads the contact model used."""
     warnings: list[str] = field(default_factory=list)
 
 
@@ -229,6 +231,13 @@ def _finish(
         summary.steps, summary.simulated_time = sim.steps, sim.time
         summary.steps_per_second = sim.steps / wall if wall > 0 else 0.0
         summary.impacts = len(sim.impacts)
+        summary.threads = sim.contacts.threads
+        asked = sim.spec.contact_model.threads
+        if asked is not None and summary.threads < asked:
+            summary.warnings.append(
+                f"solver.threads = {asked} asked, {summary.threads} used: no more threads than "
+                "free cores"
+            )
         process = sim.spec.process
         if process.feed or process.outlet or process.damage or sim.spec.has_bonds:
             frame = sim.frame(contacts=False)

@@ -507,9 +507,17 @@ class Solver(Strict):
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
     duration: float = Field(0.1, gt=0, le=3600, description="simulated time, s, in (0, 3600]")
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
+    threads: int | Literal["auto"] = Field(
+        "auto",
+        description="threads of the soft contact kernel, in [1, 256], never more than the free "
+        "cores; 'auto': one unless there are 4,000 granules or more and two cores are free "
+        "(rigid contacts: one)",
+    )
 
     @model_validator(mode="after")
     def _dt_range(self) -> Solver:
+        if self.threads != "auto" and not 1 <= self.threads <= 256:
+            raise ValueError(f"solver.threads must be in [1, 256] or 'auto' (got {self.threads})")
         if self.dt != "auto" and not 0 < self.dt <= 0.01:
             raise ValueError(f"solver.dt must be in (0, 0.01] s or 'auto' (got {self.dt})")
         return self

@@ -81,11 +81,13 @@ class ContactModel(Protocol):
     """Granules and their contacts (with each other, the hammers and the chamber wall).
 
     granule_dt: the granules' step, s (the machine step divided by the model's substeps);
-    impacts: the granule-hammer impacts completed so far, in order.
+    impacts: the granule-hammer impacts completed so far, in order; threads: the CPU threads its
+    step uses.
     """
 
     granule_dt: float
     impacts: list[Impact]
+    threads: int
 
     def kinematics(self) -> GranuleKinematics:
         """The granules' velocities for the kicks (built on first use)."""

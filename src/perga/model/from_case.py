@@ -114,6 +114,7 @@ def _contact_model(case: Case) -> RigidContactSpec | SoftContactSpec:
         rolling=cm.rolling,
         end=cm.end,
         substeps=cm.granule_substeps,
+        threads=None if case.solver.threads == "auto" else case.solver.threads,
     )
 
 

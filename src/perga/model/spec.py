@@ -370,6 +370,7 @@ class RigidContactSpec:
     kind: ClassVar[str] = "rigid"
     model: ClassVar[str] = "impulse"
     substeps: ClassVar[int] = 1
+    threads: ClassVar[int | None] = 1
 
 
 @dataclass(frozen=True)
@@ -379,7 +380,8 @@ class SoftContactSpec:
     model: 'linear' (k_n in N/m) or 'hertz' (k_n = (4/3)E* in Pa; contact stiffness
     k_n·√R_eff); tangential_ratio: k_t/k_n; rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
-    ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1). Damping per pair comes from
+    ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
+    asked for (None: "auto", :mod:`perga.contact.soft.threads`). Damping per pair comes from
     the pair's restitution, friction from the pair's friction.
     """
 
@@ -389,6 +391,7 @@ class SoftContactSpec:
     rolling: float = 0.0
     end: Literal["force", "overlap"] = "force"
     substeps: int = 1
+    threads: int | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []

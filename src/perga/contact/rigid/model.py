@@ -72,6 +72,7 @@ class RigidContacts:
         self.machine = machine
         self.bodies = attach_bodies(machine, spec.granule_materials)
         self.granule_dt = spec.granule_dt
+        self.threads = 1  # Chipmunk steps on one thread
         outline = OutlineFilter(machine)  # hammers of several pieces: their outline's contacts
         if outline:
             self.bodies.listen("pre_solve", outline.pre_solve, ("granule", "hammer"))

@@ -113,19 +113,13 @@ def polygon_table(
     return contact_table(k_n, soft.tangential_ratio * k_n, e, f, soft.model, soft.end)
 
 
-THREADED_FROM = 4000
-"""Granule count from which the kernel uses all of numba's threads; below it one thread (each
-step opens several parallel regions, whose launch costs more than small systems gain:
-docs/performance.md)."""
-
-
 def soft_granules(
-    spec: SceneSpec, polygons: PolygonSet, polygon_materials: list[str]
+    spec: SceneSpec, polygons: PolygonSet, polygon_materials: list[str], threads: int
 ) -> SoftGranules:
     """The system's granules as :class:`~perga.contact.soft.SoftGranules` at step
     ``spec.granule_dt``, with a round chamber wall (the kernel's circle) and the ``polygons``
     (hammers and a drawn wall: a posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose
-    ``mat`` indexes ``polygon_materials``); one thread below ``THREADED_FROM`` granules."""
+    ``mat`` indexes ``polygon_materials``), on ``threads`` threads."""
     materials = granule_table_materials(spec)
     walls = []
     if spec.chamber is not None and spec.chamber.outline is None:
@@ -144,7 +138,7 @@ def soft_granules(
         dt=spec.granule_dt,
         polygons=polygons,
         polygon_table=polygon_table(spec, materials, polygon_materials),
-        threads=None if len(g) >= THREADED_FROM else 1,
+        threads=threads,
         pairs=spec.granule_collisions,
         held=np.array([x.bond_force is not None for x in g], dtype=bool),
         bond_force=np.array([math.inf if x.bond_force is None else x.bond_force for x in g]),

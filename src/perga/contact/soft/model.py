@@ -32,6 +32,7 @@ from perga.contact.soft.build import granule_table_materials, soft_granules
 from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.machine import MachinePolygons
+from perga.contact.soft.threads import free_cores, kernel_threads
 from perga.engine import units as u
 from perga.engine.machine import Machine
 from perga.model.records import Impact, LedgerTerms, Release
@@ -76,7 +77,12 @@ class SoftContacts:
         self.substeps = spec.contact_model.substeps
         self._machine_dt = spec.machine_dt
         self.polygons = MachinePolygons(machine)
-        self.granules = soft_granules(spec, self.polygons.polygons, self.polygons.materials)
+        self.threads = kernel_threads(spec.contact_model.threads, len(spec.granules), free_cores())
+        """Threads the kernel uses (:mod:`perga.contact.soft.threads`; chosen for the granules
+        present at the start)."""
+        self.granules = soft_granules(
+            spec, self.polygons.polygons, self.polygons.materials, self.threads
+        )
         self.materials = granule_table_materials(spec)
         """The granule-table rows' materials (those of granules present and fed, then a round
         chamber's)."""
