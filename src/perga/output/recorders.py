@@ -99,7 +99,7 @@ class GranuleRecorder(TableRecorder):
             columns.append(g.held.astype(np.int64))
         if self.damage:
             columns += [g.survival, g.broken.astype(np.int64), g.damaging_impacts]
-        self.table.write(zip(*(c.tolist() for c in columns), strict=True))
+        self.table.write_columns(columns)
 
 
 class HammerRecorder(TableRecorder):
