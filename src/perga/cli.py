@@ -10,7 +10,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from perga import __version__
 from perga.case import CaseError, load_case
@@ -225,6 +225,20 @@ def _study_from_args(args: argparse.Namespace):
 T = TypeVar("T")
 
 
+def _study_options(parser: argparse.ArgumentParser) -> None:
+    """The options a study on Dask shares (``_cluster``, replicates' seeds, progress)."""
+    parser.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
+    parser.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    parser.add_argument("--retry-failed", action="store_true", help="run failed runs again")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _cluster(args: argparse.Namespace) -> dict[str, Any]:
+    """A study's Dask options from the command line: scheduler, workers, retry_failed."""
+    return {"scheduler": args.scheduler, "workers": args.workers, "retry_failed": args.retry_failed}
+
+
 def _with_progress(
     args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]
 ) -> T | None:
@@ -265,14 +279,7 @@ def _sweep(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     result = _with_progress(
         args,
-        lambda progress: sweep(
-            study,
-            args.output,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            retry_failed=args.retry_failed,
-            progress=progress,
-        ),
+        lambda progress: sweep(study, args.output, progress=progress, **_cluster(args)),
     )
     if result is None:
         return 130
@@ -315,14 +322,7 @@ def _window(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     result = _with_progress(
         args,
-        lambda progress: run_window(
-            window,
-            args.output,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            retry_failed=args.retry_failed,
-            progress=progress,
-        ),
+        lambda progress: run_window(window, args.output, progress=progress, **_cluster(args)),
     )
     if result is None:
         return 130
@@ -491,11 +491,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("--metric", action="append", metavar="NAME", help="a metric to keep")
     sweep.add_argument("--replicates", type=int, default=1, help="runs per point (own seeds)")
-    sweep.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
-    sweep.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
-    sweep.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
-    sweep.add_argument("--retry-failed", action="store_true", help="run failed runs again")
-    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    _study_options(sweep)
     sweep.set_defaults(handler=_sweep)
     window = sub.add_parser(
         "window",
@@ -521,11 +517,7 @@ def build_parser() -> argparse.ArgumentParser:
     window.add_argument(
         "--damage-limit", type=float, default=0.05, help="most damaged fraction, in [0, 1]"
     )
-    window.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
-    window.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
-    window.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
-    window.add_argument("--retry-failed", action="store_true", help="run failed runs again")
-    window.add_argument("--quiet", action="store_true", help="no progress bar")
+    _study_options(window)
     window.set_defaults(handler=_window)
     calibrate = sub.add_parser(
         "calibrate",
