@@ -17,6 +17,7 @@ from perga.stats.tables import load_run
 from perga.studies.window import (
     METRICS,
     Point,
+    aggregate,
     best_point,
     in_window,
     shortfall,
@@ -160,6 +161,18 @@ def test_unavailable_metrics_say_why(
     run = load_run(_write_run(tmp_path / "run", **options))
     with pytest.raises(MetricUnavailableError, match=reason):
         evaluate(run, metric)
+
+
+@pytest.mark.parametrize(("closures", "note"), [
+    ([0.0099, -0.01], None),
+    ([0.0099, -0.0101], "1 of 2 runs' energy ledger misses 1 % (worst -1.01%)"),
+    ([0.02, -0.051], "2 of 2 runs' energy ledger misses 1 % (worst -5.10%)"),
+])  # fmt: skip
+def test_points_name_runs_whose_ledger_missed(closures, note) -> None:
+    """The runner's 1 % threshold, on both sides; the worst closure is quoted."""
+    rows = [{"a": 1.0, "b": 2.0, "status": "ok", "ledger_closure": c} for c in closures]
+    (point,) = aggregate(rows, ("a", "b"), ([1.0], [2.0]))
+    assert point.notes == ([] if note is None else [note])
 
 
 def _point(x: float, y: float, release: float, damage: float, through: float, energy: float,

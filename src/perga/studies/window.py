@@ -31,6 +31,10 @@ from perga.studies.sweep import Progress, sweep
 METRICS = ("released_fraction", "damaged_fraction", "throughput", "energy_per_kg")
 """The window's metrics, in their order in the table."""
 RELEASE, DAMAGE, THROUGHPUT, ENERGY = METRICS
+LEDGER = "ledger_closure"
+"""Also kept per run: a run whose energy ledger misses ``LEDGER_TOLERANCE`` is named in its
+point's notes (the runner's own threshold)."""
+LEDGER_TOLERANCE = 0.01
 SPEED_KEYS = ("rotor.rpm", "rotor.omega")
 """Keys whose axis is the speed axis of the trend checks."""
 TABLE = "window.parquet"
@@ -82,7 +86,7 @@ def window_study(
         if text.partition("=")[0].strip() == "solver.seed":
             problems.append(f"--set {text}: the replicates' seeds come from --seed")
     try:
-        study = study_from_options(case, sets, list(METRICS), max(1, replicates), max(0, seed))
+        study = study_from_options(case, sets, [*METRICS, LEDGER], max(1, replicates), max(0, seed))
     except StudyError as exc:
         problems += exc.problems
         study = None
@@ -138,6 +142,13 @@ def aggregate(
             mean[m], sd[m], count[m] = _stats([_float(r.get(m)) for r in ok])
         notes = sorted({str(r.get("notes")) for r in ok if r.get("notes")})
         notes += sorted({str(r.get("reason")) for r in cell if r.get("status") != "ok"})
+        closures = [c for c in (_float(r.get(LEDGER)) for r in ok) if math.isfinite(c)]
+        missed = [c for c in closures if abs(c) > LEDGER_TOLERANCE]
+        if missed:
+            worst = max(missed, key=abs)
+            notes.append(
+                f"{len(missed)} of {len(ok)} runs' energy ledger misses 1 % (worst {worst:+.2%})"
+            )
         points.append(Point(x, y, len(cell), len(cell) - len(ok), mean, sd, count, notes))
     return points
 

@@ -206,10 +206,12 @@ def report_text(result: WindowResult) -> str:
     ]
     for t in result.trends:
         lines.append(_trend_line(t, speed, other, rising=t.metric == DAMAGE))
-    notes = sorted({n for p in result.points for n in p.notes})
-    if notes:
-        lines += ["", "## Notes", "", "Metrics some runs could not give, and failed runs:", ""]
-        lines += [f"- {n}" for n in notes]
+    ax, ay = result.window.axes
+    noted = [p for p in result.points if p.notes]
+    if noted:
+        lines += ["", "## Notes", "", "Metrics some runs could not give, runs whose energy ledger "
+                  "missed 1 %, and failed runs, by point:", ""]  # fmt: skip
+        lines += [f"- {ax} = {p.x:g}, {ay} = {p.y:g}: {'; '.join(p.notes)}" for p in noted]
     lines += ["", "Files: window.parquet, window.csv, window.png, results.parquet, runs/.", ""]
     return "\n".join(lines)
 
