@@ -188,6 +188,13 @@ class Damage:
                 self._pending.append(id_)
         return replace(impact, breakage_probability=probability, survival=survival)
 
+    def of(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For granules ``ids``: expected survival (-), broken (drawn), impacts above W_min."""
+        survival = np.array([self.survival.get(int(i), 1.0) for i in ids], dtype=float)
+        broken = np.array([int(i) in self.broken for i in ids], dtype=bool)
+        counted = np.array([self.counted.get(int(i), 0) for i in ids], dtype=np.int64)
+        return survival, broken, counted
+
     def run(self, sim: Simulation, time: float) -> int:
         """Remove the granules broken since the last call when the action is "remove";
         returns how many."""

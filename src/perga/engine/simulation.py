@@ -209,10 +209,11 @@ class Simulation:
         state = self.contacts.granule_state()
         counts = self.contacts.contact_counts() if contacts else None
         material_of = np.asarray(self._material_of, dtype=np.int32)
-        survival = np.array([self.survival_of(int(i)) for i in state.ids], dtype=float)
-        broken = np.array([self.broken_of(int(i)) for i in state.ids], dtype=bool)
-        counted = self.damage.counted if self.damage is not None else {}
-        damaging = np.array([counted.get(int(i), 0) for i in state.ids], dtype=np.int64)
+        n = len(state.ids)
+        if self.damage is None:
+            survival, broken, damaging = np.ones(n), np.zeros(n, bool), np.zeros(n, np.int64)
+        else:
+            survival, broken, damaging = self.damage.of(state.ids)
         granules = GranuleFrame(
             ids=frozen(state.ids),
             radii=frozen(state.radii),
@@ -251,10 +252,6 @@ class Simulation:
             self.contacts.releases,
             () if self.outlet is None else self.outlet.departures,
         )
-
-    def granule_ids(self) -> NDArray[np.int64]:
-        """The ids of the granules present, (n,) array (rows of the other accessors)."""
-        return self.contacts.granule_state().ids
 
     def granule_positions(self) -> FloatArray:
         """Granule centres, (n, 2) array, m."""

@@ -155,9 +155,7 @@ class RigidContacts:
 
     def granule_state(self) -> GranuleState:
         """The granules now, SI (one ``pymunk.batch`` read)."""
-        if self._reader is None:
-            self._reader = GranuleReader(self.machine.space, self.bodies.granule_bodies)
-        p, v, w = self._reader.read()
+        p, v, w = self._granule_reader().read()
         held = np.isin(self.ids, list(self._bonds)) if self._bonds else np.zeros(len(p), bool)
         return GranuleState(
             p,
@@ -225,6 +223,12 @@ class RigidContacts:
 
     # --- internals ---------------------------------------------------------------------------
 
+    def _granule_reader(self) -> GranuleReader:
+        """The batch reader of the granules present (rebuilt after a change)."""
+        if self._reader is None:
+            self._reader = GranuleReader(self.machine.space, self.bodies.granule_bodies)
+        return self._reader
+
     def _changed(self) -> None:
         self._reader = self._writer = None
 
@@ -251,10 +255,10 @@ class RigidContacts:
         writer = self.writer()
         v, x = writer.read_internal(positions=True)
         assert x is not None
-        held = [(int(np.flatnonzero(self.ids == id_)[0]), id_) for id_ in self._bonds]
-        rows = np.array([row for row, _ in held], dtype=np.intp)
-        cells = np.array([self._bonds[id_][0] for _, id_ in held]).reshape(-1, 2)
-        bonds = np.array([self._bonds[id_][1] for _, id_ in held])
+        held = np.fromiter(self._bonds, dtype=np.int64, count=len(self._bonds))
+        rows = np.searchsorted(self.ids, held)  # ids stay ascending: appended, never reordered
+        cells = np.array([self._bonds[int(i)][0] for i in held]).reshape(-1, 2)
+        bonds = np.array([self._bonds[int(i)][1] for i in held])
         mass = self.masses[rows]
         speed = np.hypot(*(v[rows] * u.VELOCITY).T)
         force = mass * speed / self._dt
@@ -270,13 +274,10 @@ class RigidContacts:
         self._bond_loss += float(np.sum(before - after))
         v[rows] = new
         writer.write_internal_velocities(v)
-        for (row, id_), b, f in zip(held, broken, force, strict=True):
-            if b:
-                del self._bonds[id_]
-                self.releases.append(Release(time, id_, float(f)))
-            elif self._moments[row] > 0.0:
-                body = self.bodies.granule_bodies[row]
-                if body.angular_velocity != 0.0:
-                    w = body.angular_velocity * u.ANGULAR_VELOCITY
-                    self._bond_loss += 0.5 * self._moments[row] * w**2
-                    body.angular_velocity = 0.0
+        for i in np.flatnonzero(broken):
+            del self._bonds[int(held[i])]
+            self.releases.append(Release(time, int(held[i]), float(force[i])))
+        spins = self._granule_reader().angular_velocities()[rows]
+        for i in np.flatnonzero(kept & (spins != 0.0) & (self._moments[rows] > 0.0)):
+            self._bond_loss += 0.5 * self._moments[rows[i]] * spins[i] ** 2
+            self.bodies.granule_bodies[rows[i]].angular_velocity = 0.0

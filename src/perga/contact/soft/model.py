@@ -95,6 +95,8 @@ class SoftContacts:
             else None
         )
         g = self.granules
+        self._bonds = spec.has_bonds
+        """Whether any granule, present or fed, is held (else no release to look for)."""
         self.releases: list[Release] = []
         self._reported = np.zeros(g.n, dtype=bool)
         self._x0 = g.x.copy()
@@ -129,6 +131,8 @@ class SoftContacts:
         if self.log is not None:
             self.log.after(time, np.array([b.angle for b in self.machine.hammer_bodies]))
         g = self.granules
+        if not self._bonds:
+            return self._moment
         new = np.flatnonzero((g.released_step >= 0) & ~self._reported)
         for i in new:
             t = (int(g.released_step[i]) + 1) * self.granule_dt
