@@ -1,4 +1,4 @@
-"""Cost of reading granule state: ``perga.contact.rigid.batch.GranuleReader`` (pymunk.batch)
+"""Cost of reading granule state: ``perga.engine.batch.BodyReader`` (pymunk.batch)
 against the
 per-body Python loop of ``Simulation.granule_positions`` & co.
 
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from perga.contact.rigid.batch import GranuleReader
 from perga.engine import Simulation
+from perga.engine.batch import BodyReader
 
 sys.path.insert(0, str(Path(__file__).parent))
 from engine_vs_pymunk import perga_spec
@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
         sim = Simulation(perga_spec(n, chamber=True), record_impacts=False, track_energy=False)
         for _ in range(20):
             sim.step()
-        reader = GranuleReader(sim.machine.space, sim.contacts.bodies.granule_bodies)
+        reader = BodyReader(sim.machine.space, sim.contacts.bodies.granule_bodies)
         state = reader.read()
         assert np.array_equal(state.positions, sim.granule_positions())
         assert np.array_equal(state.velocities, sim.granule_velocities())

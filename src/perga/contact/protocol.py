@@ -7,10 +7,12 @@ bodies and collision handlers, or arrays and a compiled kernel). Per machine ste
 simulation calls, in this order (:mod:`perga.engine.simulation` has the whole step order):
 
 1. the effects' kicks on :attr:`ContactModel.kinematics`;
-2. :meth:`ContactModel.before_machine_step`;
+2. :meth:`ContactModel.before_machine_step`, with the machine's state
+   (:class:`~perga.engine.machine.MachineState`, internal units);
 3. Chipmunk's step of the space;
-4. :meth:`ContactModel.after_machine_step`, which returns the angular impulse about the axis
-   that the contacts put on the rotor-driven bodies (for the drive's work in the ledger).
+4. :meth:`ContactModel.after_machine_step`, with the state after it, which returns the angular
+   impulse about the axis that the contacts put on the rotor-driven bodies (for the drive's
+   work in the ledger).
 
 Between steps the process (a feed, an outlet, damage) may add and remove granules; each has a
 persistent number (its id), which impacts, releases and frames name.
@@ -24,13 +26,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
+
+if TYPE_CHECKING:
+    from perga.engine.machine import MachineState
 
 FloatArray = NDArray[np.float64]
 
@@ -45,7 +50,8 @@ class GranuleKinematics(Protocol):
         ...
 
     def constants(self) -> tuple[FloatArray, FloatArray]:
-        """The granules' masses (kg) and radii (m), rows as the velocities'."""
+        """The granules' masses (kg) and radii (m), rows as the velocities' (read only: they
+        may be the model's own arrays)."""
         ...
 
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
@@ -93,14 +99,15 @@ class ContactModel(Protocol):
         """The granules' velocities for the kicks (built on first use)."""
         ...
 
-    def before_machine_step(self, time: float) -> None:
-        """Work before Chipmunk's step that ends at ``time`` (s)."""
+    def before_machine_step(self, time: float, machine: MachineState) -> None:
+        """Work before Chipmunk's step that ends at ``time`` (s); ``machine``: the rotor and
+        hammers now."""
         ...
 
-    def after_machine_step(self, time: float) -> float:
-        """Work after Chipmunk's step that ended at ``time`` (s); returns the angular impulse
-        about the rotor axis the contacts put on the rotor-driven bodies during the step,
-        internal units (0 when energy is not tracked)."""
+    def after_machine_step(self, time: float, machine: MachineState) -> float:
+        """Work after Chipmunk's step that ended at ``time`` (s), ``machine`` the rotor and
+        hammers now; returns the angular impulse about the rotor axis the contacts put on the
+        rotor-driven bodies during the step, internal units (0 when energy is not tracked)."""
         ...
 
     releases: list[Release]

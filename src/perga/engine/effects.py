@@ -3,13 +3,13 @@ when the spec lists it (design §3): an absent effect leaves no per-step hook, c
 callback.
 
 Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpec` field name.
-Effects that act on granule velocities (floor friction, air drag) are *kicks*: array operations
-on all granules at once, with no per-granule Python. Once per machine step, **before** the
-contact model moves anything (:meth:`~perga.engine.simulation.Simulation.step`), a
+Effects that act on granule velocities (floor friction, air drag) are *kicks*: one compiled
+loop over all granules (numba), with no per-granule Python. Once per machine step, **before**
+the contact model moves anything (:meth:`~perga.engine.simulation.Simulation.step`), a
 :class:`KickRunner` reads every granule's velocity (and position, for the co-rotating floor)
-from the contact model in one pass, every listed kick changes the velocity arrays in registry
-order, each a velocity change over dt that never reverses the velocity it opposes, and one
-write sets them. Effects that are constraints (hinge friction, drive) are pymunk motors.
+from the contact model in one pass, every listed kick changes the velocity array in place in
+registry order, each a velocity change over dt that never reverses the velocity it opposes,
+and one write sets them. Effects that are constraints (hinge friction, drive) are pymunk motors.
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
@@ -19,15 +19,17 @@ friction and drag (docs/validation.md has the measured effect on the closed form
 Energy: every effect counts, in J, the energy it removed (``removed`` >= 0) and the work the
 rotor did through it (``supplied``, only the co-rotating floor), each from its own kicks or
 impulses, never from a global balance. The ledger (:mod:`perga.engine.energy`) sums them by
-``term``. A kick's energy is the exact change it made, granule by granule, summed over the
-granules in numpy.
+``term``. A kick's energy is the exact change it made, granule by granule, summed in the loop
+that makes it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar, Literal, NamedTuple
 
+import numba
 import numpy as np
 import pymunk
 from numpy.typing import NDArray
@@ -37,10 +39,12 @@ from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
     from perga.contact.protocol import GranuleKinematics
-    from perga.engine.machine import Machine
+    from perga.engine.machine import Machine, MachineState
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
+MASS = u.MASS
+"""kg per internal mass unit, a module global for the compiled kicks."""
 
 Term = Literal["friction", "drag", "drive", "contact"]
 FloatArray = NDArray[np.float64]
@@ -79,10 +83,10 @@ class Kick(Effect):
 
     def kick(
         self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> FloatArray:
-        """The granules' velocities after one step of ``dt`` of this effect (internal units;
-        ``positions`` given if :attr:`needs_positions`; ``granules`` their masses and radii,
-        SI). Counts the energy and must not change its arguments."""
+    ) -> None:
+        """Change the granules' ``velocities`` in place by one step of ``dt`` of this effect
+        (internal units; ``positions`` given if :attr:`needs_positions`; ``granules`` their
+        masses and radii, SI) and count the energy."""
         raise NotImplementedError
 
 
@@ -105,7 +109,7 @@ class KickRunner:
         velocities, positions = self.granules.read_internal(positions=self._positions)
         granules = Granules(*self.granules.constants())
         for effect in self.kicks:
-            velocities = effect.kick(velocities, positions, granules, dt)
+            effect.kick(velocities, positions, granules, dt)
         self.granules.write_internal_velocities(velocities)
 
 
@@ -114,10 +118,6 @@ class Granules(NamedTuple):
 
     masses: FloatArray
     radii: FloatArray
-
-
-def _speeds(v: FloatArray) -> FloatArray:
-    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1])
 
 
 _REGISTRY: dict[str, Callable[[Machine, Any], Effect]] = {}
@@ -161,42 +161,46 @@ class Drive(Effect):
         machine.space.add(self.pivot, self.motor)
 
 
-class _AngularImpulseLosses(Effect):
+class ConstraintLosses(Effect):
     """An effect whose constraints act on the relative rotation of two bodies, removing per step
-    |j|·|ω̄_rel|: the constraint's angular impulse times the mean of the relative angular
-    velocity before and after the step (exact for one impulse on a pair of bodies)."""
+    |j|·|ω̄_rel|: the constraint's angular impulse in the step times the mean of the relative
+    angular velocity before and after the step (exact for one impulse on a pair of bodies).
 
-    def __init__(self) -> None:
+    No Chipmunk callback: the energy meter hands the machine's states before and after the step
+    to :meth:`account` (:mod:`perga.engine.energy`), which equal what a constraint's
+    ``pre_solve`` and ``post_solve`` see (Chipmunk integrates positions, then calls
+    ``pre_solve`` before touching velocities, and ``post_solve`` after the last iteration);
+    ``constraint.impulse`` read after the step is the step's impulse ``post_solve`` reads.
+    """
+
+    def __init__(self, machine: Machine) -> None:
         super().__init__()
-        self._before: dict[pymunk.Constraint, float] = {}
+        self._machine = machine
+        self._watched: list[tuple[pymunk.Constraint, int, int]] = []
 
     def _watch(self, constraint: pymunk.Constraint) -> None:
-        constraint.pre_solve = self._pre_solve
-        constraint.post_solve = self._post_solve
+        m = self._machine
+        self._watched.append((constraint, m.row_of(constraint.a), m.row_of(constraint.b)))
 
-    @staticmethod
-    def _relative(constraint: pymunk.Constraint) -> float:
-        return constraint.b.angular_velocity - constraint.a.angular_velocity
-
-    def _pre_solve(self, constraint: pymunk.Constraint, _space: pymunk.Space) -> None:
-        self._before[constraint] = self._relative(constraint)
-
-    def _post_solve(self, constraint: pymunk.Constraint, _space: pymunk.Space) -> None:
-        mean = 0.5 * (self._before[constraint] + self._relative(constraint))
-        self._removed += constraint.impulse * abs(mean)
+    def account(self, before: MachineState, after: MachineState) -> None:
+        """Add the step's losses (internal units) from the states at its start and end."""
+        w0, w1 = before.omega.tolist(), after.omega.tolist()
+        for constraint, a, b in self._watched:
+            mean = 0.5 * ((w0[b] - w0[a]) + (w1[b] - w1[a]))
+            self._removed += constraint.impulse * abs(mean)
 
 
 @_register
-class HingeFriction(_AngularImpulseLosses):
+class HingeFriction(ConstraintLosses):
     """Coulomb friction torque at every hinge: per hinged hammer a ``SimpleMotor(hammer,
     rotor, 0)`` with ``max_force`` = the torque (Chipmunk's joint-friction idiom); its losses
-    as :class:`_AngularImpulseLosses`."""
+    as :class:`ConstraintLosses`."""
 
     name = "hinge_friction"
     term = "friction"
 
     def __init__(self, machine: Machine, torque: float) -> None:
-        super().__init__()
+        super().__init__(machine)
         self.motors: list[pymunk.SimpleMotor] = []
         for joint in machine.hinges:
             motor = pymunk.SimpleMotor(joint.b, joint.a, 0.0)
@@ -207,18 +211,18 @@ class HingeFriction(_AngularImpulseLosses):
             self.motors.append(motor)
 
 
-class SwingStops(_AngularImpulseLosses):
+class SwingStops(ConstraintLosses):
     """The stops of hinged hammers (``RotaryLimitJoint``, built with the machine when a hammer has
     a ``swing_limit``): a hammer swinging into its stop is stopped by a perfectly inelastic
-    angular impulse, whose losses (:class:`_AngularImpulseLosses`) count with the contacts'
+    angular impulse, whose losses (:class:`ConstraintLosses`) count with the contacts'
     dissipation. Not in the registry: built for the hammers that have stops, not from
     ``EffectsSpec``."""
 
     name = "swing_stops"
     term = "contact"
 
-    def __init__(self, stops: list[pymunk.RotaryLimitJoint]) -> None:
-        super().__init__()
+    def __init__(self, machine: Machine, stops: list[pymunk.RotaryLimitJoint]) -> None:
+        super().__init__(machine)
         for stop in stops:
             self._watch(stop)
 
@@ -245,28 +249,14 @@ class FloorFriction(Kick):
 
     def kick(
         self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> FloatArray:
-        if self._rotor is None:
-            floor = np.zeros_like(velocities)
-            relative = velocities
-        else:
-            assert positions is not None
-            w = self._rotor.angular_velocity
-            floor = np.empty_like(velocities)
-            floor[:, 0] = -w * positions[:, 1]
-            floor[:, 1] = w * positions[:, 0]
-            relative = velocities - floor
-        speed = _speeds(relative)
-        moving = speed > 0.0
-        safe = np.where(moving, speed, 1.0)
-        scale = np.where(moving, 1.0 - np.minimum(self._deceleration * dt, speed) / safe, 1.0)
-        after = relative * scale[:, None]
-        new = np.where(moving[:, None], floor + after, velocities)
-        m = np.where(moving, granules.masses / u.MASS, 0.0)
-        self._removed += float(0.5 * np.sum(m * (speed * speed - np.sum(after * after, axis=1))))
-        if self._rotor is not None:
-            self._supplied += float(np.sum(m * np.sum((after - relative) * floor, axis=1)))
-        return new
+    ) -> None:
+        omega = 0.0 if self._rotor is None else self._rotor.angular_velocity
+        where = velocities if positions is None else positions  # unused without a rotor
+        removed, supplied = _floor_kick(
+            velocities, where, granules.masses, self._deceleration * dt, omega
+        )
+        self._removed += removed
+        self._supplied += supplied
 
 
 @_register
@@ -284,7 +274,7 @@ class AirDrag(Kick):
 
     def kick(
         self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> FloatArray:
+    ) -> None:
         s = self._spec
         k = (
             0.5
@@ -295,13 +285,52 @@ class AirDrag(Kick):
             * s.thickness
             / granules.masses
         ) / (1.0 / u.LENGTH)
-        speed = _speeds(velocities)
-        moving = speed > 0.0
-        after = speed / (1.0 + k * speed * dt)
-        ratio = np.where(moving, after / np.where(moving, speed, 1.0), 1.0)
-        m = np.where(moving, granules.masses / u.MASS, 0.0)
-        self._removed += float(0.5 * np.sum(m * (speed * speed - after * after)))
-        return velocities * ratio[:, None]
+        self._removed += _drag_kick(velocities, k * dt, granules.masses)
+
+
+@numba.njit(cache=True, fastmath=False)
+def _floor_kick(
+    v: FloatArray, x: FloatArray, m: FloatArray, dv_max: float, omega: float
+) -> tuple[float, float]:
+    """Floor friction on every granule in place (:class:`FloorFriction`): the velocity relative
+    to the floor (ω × x; ω = 0 for a stationary floor) loses at most ``dv_max`` of its length;
+    returns the energy removed and the floor's work, Σ over granules (masses ``m`` in kg,
+    everything else and the results in internal units)."""
+    removed = 0.0
+    supplied = 0.0
+    for i in range(v.shape[0]):
+        fx = -omega * x[i, 1]
+        fy = omega * x[i, 0]
+        rx = v[i, 0] - fx
+        ry = v[i, 1] - fy
+        speed = math.sqrt(rx * rx + ry * ry)
+        if speed > 0.0:
+            scale = 1.0 - min(dv_max, speed) / speed
+            ax = rx * scale
+            ay = ry * scale
+            v[i, 0] = fx + ax
+            v[i, 1] = fy + ay
+            mass = m[i] / MASS
+            removed += 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
+            supplied += mass * ((ax - rx) * fx + (ay - ry) * fy)
+    return removed, supplied
+
+
+@numba.njit(cache=True, fastmath=False)
+def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray) -> float:
+    """Quadratic drag on every granule in place (:class:`AirDrag`): |v'| = |v|/(1 + k|v|dt),
+    ``k_dt`` = k·dt per granule; returns the energy removed (masses ``m`` in kg, everything
+    else and the result in internal units)."""
+    removed = 0.0
+    for i in range(v.shape[0]):
+        speed = math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        if speed > 0.0:
+            after = speed / (1.0 + k_dt[i] * speed)
+            ratio = after / speed
+            v[i, 0] *= ratio
+            v[i, 1] *= ratio
+            removed += 0.5 * (m[i] / MASS) * (speed * speed - after * after)
+    return removed
 
 
 def build_effects(machine: Machine) -> list[Effect]:

@@ -33,16 +33,21 @@ The terms:
   ½Σ_i|ΔKE_i| (kinetic energy moved between bodies) keeps the closure meaningful where nothing
   is driven or lost, e.g. an elastic free impact (ΔKE = 0).
 
-Costs per step: a loop over the few rotor-driven bodies; a loop over all bodies only when
-:meth:`EnergyMeter.terms` is called.
+Costs per step: numpy over the few rotor-driven bodies of the machine's states before and after
+the step (:meth:`~perga.engine.machine.Machine.state`, one batch read each, which the simulation
+also hands to the contact model); the constraint effects' losses from the same states and each
+constraint's impulse; a loop over all bodies only when :meth:`EnergyMeter.terms` is called.
 """
 
 from __future__ import annotations
 
+import numba
+import numpy as np
 import pymunk
 
 from perga.engine import units as u
-from perga.engine.machine import Machine
+from perga.engine.effects import ConstraintLosses
+from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
 
 
@@ -60,45 +65,48 @@ class EnergyMeter:
     """Measures the ledger's terms of a machine's bodies from the moment it is built (module
     doc).
 
-    Call :meth:`before_step` and :meth:`after_step` around every ``space.step``.
+    Call :meth:`before_step` and :meth:`after_step` around every ``space.step`` with the
+    machine's states (:meth:`~perga.engine.machine.Machine.state`) then.
     """
 
     def __init__(self, machine: Machine) -> None:
         self._effects = machine.effects
+        self._constraints = [e for e in machine.effects if isinstance(e, ConstraintLosses)]
         self._space = machine.space
-        self._rotor = machine.rotor
         hinged = [j.b for j in machine.hinges]
-        self._balanced = ([machine.rotor] if machine.driven else []) + hinged
+        balanced = ([machine.rotor] if machine.driven else []) + hinged
+        self._rows = np.array([machine.row_of(b) for b in balanced], dtype=np.int64)
+        self._mass = np.array([b.mass for b in balanced], dtype=float)
+        self._moment = np.array([b.moment for b in balanced], dtype=float)
         machine_bodies = dict.fromkeys([machine.rotor, *machine.hammer_bodies])
         self._bodies = [b for b in machine_bodies if b.body_type == pymunk.Body.DYNAMIC]
-        self._needs_balance = bool(self._balanced or machine.rotor.shapes)
+        self._needs_balance = bool(balanced or machine.rotor.shapes)
         self._kinetics0 = [_kinetic(b) for b in self._bodies]
         self._centres0 = [_centre(b) for b in self._bodies]
         self._drive = 0.0
-        self._before: list[tuple[pymunk.Vec2d, float]] = []
-        self._omega0 = 0.0
+        self._before: MachineState | None = None
 
-    def before_step(self) -> None:
-        """Record the rotor-driven bodies' velocities at the start of a step: call it immediately
-        before ``space.step`` (after anything else that changes velocities between steps)."""
+    def before_step(self, state: MachineState) -> None:
+        """Keep the machine's ``state`` at the start of a step: read immediately before
+        ``space.step`` (after anything else that changes velocities between steps)."""
+        self._before = state
+
+    def after_step(self, dt: float, contact_moment: float, state: MachineState) -> None:
+        """Add the step's drive work and the constraint effects' losses; ``dt`` in internal time
+        units, ``contact_moment`` the angular impulse about the axis that the contacts put on
+        the rotor-driven bodies (the rotor, hinged and welded hammers) in this step, internal
+        units; ``state`` the machine now."""
+        before = self._before
+        assert before is not None, "after_step without before_step"
+        for effect in self._constraints:
+            effect.account(before, state)
         if not self._needs_balance:
             return
-        self._before = [(b.velocity, b.angular_velocity) for b in self._balanced]
-        self._omega0 = self._rotor.angular_velocity
-
-    def after_step(self, dt: float, contact_moment: float) -> None:
-        """Add the step's drive work; ``dt`` in internal time units, ``contact_moment`` the
-        angular impulse about the axis that the contacts put on the rotor-driven bodies (the
-        rotor, hinged and welded hammers) in this step, internal units."""
-        if not self._needs_balance:
-            return
-        gravity = self._space.gravity
-        moment = -contact_moment
-        for body, (v0, w0) in zip(self._balanced, self._before, strict=True):
-            r = _centre(body)
-            moment += body.mass * r.cross(body.velocity - v0 - gravity * dt)
-            moment += body.moment * (body.angular_velocity - w0)
-        self._drive += 0.5 * (self._omega0 + self._rotor.angular_velocity) * moment
+        gx, gy = self._space.gravity
+        moment = _moment_change(
+            before.table, state.table, self._rows, self._mass, self._moment, gx * dt, gy * dt
+        )
+        self._drive += 0.5 * (before.table[0, 5] + state.table[0, 5]) * (moment - contact_moment)
 
     def terms(self) -> LedgerTerms:
         """The cumulative terms of the machine's bodies and the effects now, in J."""
@@ -125,3 +133,26 @@ class EnergyMeter:
             friction=terms["friction"],
             drag=terms["drag"],
         )
+
+
+@numba.njit(cache=True)
+def _moment_change(
+    before: np.ndarray,
+    after: np.ndarray,
+    rows: np.ndarray,
+    mass: np.ndarray,
+    moment: np.ndarray,
+    gx_dt: float,
+    gy_dt: float,
+) -> float:
+    """Σ m r × (v_after − v_before − g dt) + I (ω_after − ω_before) about the axis over the
+    bodies at ``rows`` of two machine-state tables (:class:`~perga.engine.machine.MachineState`):
+    the angular impulse that acted on them in the step, besides gravity's."""
+    total = 0.0
+    for j in range(rows.size):
+        k = rows[j]
+        dvx = after[k, 3] - before[k, 3] - gx_dt
+        dvy = after[k, 4] - before[k, 4] - gy_dt
+        total += mass[j] * (after[k, 0] * dvy - after[k, 1] * dvx)
+        total += moment[j] * (after[k, 5] - before[k, 5])
+    return total

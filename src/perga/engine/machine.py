@@ -32,10 +32,13 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import pymunk
+from numpy.typing import NDArray
 
 from perga.engine import units as u
+from perga.engine.batch import BodyWriter
 from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
 from perga.model.records import HammerState
@@ -43,6 +46,48 @@ from perga.model.spec import HammerSpec, SceneSpec, Vec2
 
 HAMMER_GROUP = 1
 """Shape filter group of the hammers and the chamber wall: they never collide with each other."""
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MachineState:
+    """The machine's bodies at one instant (:attr:`Machine.bodies`: row 0 the rotor, then the
+    hammer bodies that are not the rotor), internal units (:mod:`perga.engine.units`), from one
+    ``pymunk.batch`` read: ``table`` (k, 6), per body x, y (its centre of gravity in the world),
+    angle, vx, vy (velocity of the centre of gravity), ω. Compiled code takes the table."""
+
+    table: FloatArray
+
+    @property
+    def centre(self) -> FloatArray:
+        """Centres of gravity, (k, 2)."""
+        return self.table[:, 0:2]
+
+    @property
+    def angle(self) -> FloatArray:
+        """Angles, (k,)."""
+        return self.table[:, 2]
+
+    @property
+    def velocity(self) -> FloatArray:
+        """Velocities of the centres of gravity, (k, 2)."""
+        return self.table[:, 3:5]
+
+    @property
+    def omega(self) -> FloatArray:
+        """Angular velocities, (k,)."""
+        return self.table[:, 5]
+
+
+@numba.njit(cache=True)
+def _to_centres(table: FloatArray, cogs: FloatArray) -> None:
+    """Move each row's position (the body's local origin) to its centre of gravity ``cogs``
+    (body frame), in place: x_c = x + R(angle)·cog."""
+    for k in range(table.shape[0]):
+        c, s = math.cos(table[k, 2]), math.sin(table[k, 2])
+        table[k, 0] += c * cogs[k, 0] - s * cogs[k, 1]
+        table[k, 1] += s * cogs[k, 0] + c * cogs[k, 1]
 
 
 @dataclass
@@ -63,6 +108,41 @@ class Machine:
     hammer_outlines: list[list[tuple[float, float]]]
     hinges: list[pymunk.PivotJoint]
     effects: list[Effect] = field(default_factory=list)
+    _reader: BodyWriter | None = field(default=None, repr=False)
+    _cogs: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+
+    @property
+    def bodies(self) -> list[pymunk.Body]:
+        """The rotor, then each hammer body that is not the rotor (rows of a
+        :class:`MachineState`)."""
+        return [self.rotor, *(b for b in self.hammer_bodies if b is not self.rotor)]
+
+    def row_of(self, body: pymunk.Body) -> int:
+        """``body``'s row in :attr:`bodies` and in a :class:`MachineState`."""
+        return next(k for k, b in enumerate(self.bodies) if b is body)
+
+    @property
+    def hammer_rows(self) -> NDArray[np.int64]:
+        """Each hammer's row in a :class:`MachineState` (0, the rotor, for a welded one)."""
+        return np.array([self.row_of(b) for b in self.hammer_bodies], dtype=np.int64)
+
+    def state(self) -> MachineState:
+        """The machine's bodies now, in one batch read (:class:`MachineState`)."""
+        if self._reader is None:
+            bodies = self.bodies
+            self._reader = BodyWriter(self.space, bodies)
+            self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
+        table = self._reader.read_internal_table()
+        _to_centres(table, self._cogs)
+        return MachineState(table)
+
+    def set_loads(self, loads: FloatArray) -> None:
+        """Set the force and torque of every body of :attr:`bodies` for the next step from
+        ``loads`` (k, 3): fx, fy, torque, internal units, in one batch write."""
+        if self._reader is None:
+            self.state()
+        assert self._reader is not None
+        self._reader.write_internal_loads(loads)
 
     @property
     def driven(self) -> bool:
@@ -175,7 +255,7 @@ def build_machine(spec: SceneSpec) -> Machine:
     )
     machine.effects = build_effects(machine)
     if stops:
-        machine.effects.append(SwingStops(stops))
+        machine.effects.append(SwingStops(machine, stops))
     return machine
 
 

@@ -8,21 +8,24 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
 1. Kicks: only if the spec lists them, floor friction and air drag change all granules'
    velocities at once from (x_n, v_n) (:mod:`perga.engine.effects`): an operator split before
    everything else, so the contacts and the drift see the kicked velocities.
-2. The contact model's work before the machine moves
+2. The machine's state is read (:meth:`~perga.engine.machine.Machine.state`: rotor and hammer
+   bodies, one batch read), and handed to the contact model's work before the machine moves
    (:meth:`~perga.contact.protocol.ContactModel.before_machine_step`): rigid, nothing moves
    yet (the granules are bodies of the space); soft, the kernel advances the granules over the
    step against the hammers posed ahead and loads the hammer bodies with the mean contact force.
-3. The energy meter records the rotor-driven bodies' velocities.
+3. The energy meter keeps that state (the rotor-driven bodies' velocities).
 4. Chipmunk's step of the space: positions and angles advance with the current velocities
    (the kinematic rotor turns by ω·dt), collision detection at the new positions (rigid
    contacts call their handlers: the impact recorder's start, the pair setters, the outline
    filter), gravity and the bodies' forces are added to the velocities, and the impulse solver
    runs ``iterations`` times over contacts and joints (``post_solve``: impacts completed).
-5. The contact model's work after it
+5. The machine's state is read again and handed to the contact model's work after it
    (:meth:`~perga.contact.protocol.ContactModel.after_machine_step`): rigid, the arbiters'
    dissipation; soft, the impact log. It returns the contacts' angular impulse on the
    rotor-driven bodies, which the meter needs for the drive's work.
-6. The meter balances the rotor-driven bodies' angular momentum (:mod:`perga.engine.energy`).
+6. The meter balances the rotor-driven bodies' angular momentum and books the constraint
+   effects' losses (hinge friction, swing stops) from the two states
+   (:mod:`perga.engine.energy`).
 7. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
 8. The process, if the system has one (:mod:`perga.engine.process`): the step's new impacts
    get their specific energy (and with damage their breakage); broken granules to be removed
@@ -116,13 +119,15 @@ class Simulation:
         end = (self.steps + 1) * self.dt
         if self.kicks is not None:
             self.kicks.run(self._dt_internal)
-        self.contacts.before_machine_step(end)
+        before = self.machine.state()
+        self.contacts.before_machine_step(end, before)
         if self.meter is not None:
-            self.meter.before_step()
+            self.meter.before_step(before)
         self.machine.space.step(self._dt_internal)
-        moment = self.contacts.after_machine_step(end)
+        after = self.machine.state()
+        moment = self.contacts.after_machine_step(end, after)
         if self.meter is not None:
-            self.meter.after_step(self._dt_internal, moment)
+            self.meter.after_step(self._dt_internal, moment, after)
         self.steps += 1
         self._process(end)
 

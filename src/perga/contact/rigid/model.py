@@ -25,13 +25,13 @@ import numpy as np
 import pymunk
 
 from perga.contact.protocol import FloatArray, GranuleState
-from perga.contact.rigid.batch import GranuleReader, GranuleWriter
 from perga.contact.rigid.bodies import attach_bodies
 from perga.contact.rigid.dissipation import ArbiterMeter
 from perga.contact.rigid.impacts import ImpactRecorder
 from perga.contact.rigid.outline import OutlineFilter
 from perga.engine import units as u
-from perga.engine.machine import Machine
+from perga.engine.batch import BodyReader, BodyWriter
+from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
@@ -88,8 +88,8 @@ class RigidContacts:
         self._bonds: dict[int, tuple[FloatArray, float]] = {}
         """Held granules by id: their cell (internal units) and bond force (N)."""
         self._bond_loss = 0.0  # J
-        self._reader: GranuleReader | None = None
-        self._writer: GranuleWriter | None = None
+        self._reader: BodyReader | None = None
+        self._writer: BodyWriter | None = None
         self._kinematics = _Kinematics(self)
         self._dt = spec.machine_dt
         self._gravity = np.asarray(spec.gravity, dtype=float)
@@ -115,21 +115,21 @@ class RigidContacts:
         """The granule bodies' velocities, read and written in one ``pymunk.batch`` pass each."""
         return self._kinematics
 
-    def writer(self) -> GranuleWriter:
+    def writer(self) -> BodyWriter:
         """The batch writer of the granules present (rebuilt after a change)."""
         if self._writer is None:
-            self._writer = GranuleWriter(self.machine.space, self.bodies.granule_bodies)
+            self._writer = BodyWriter(self.machine.space, self.bodies.granule_bodies)
         return self._writer
 
-    def before_machine_step(self, time: float) -> None:
+    def before_machine_step(self, time: float, machine: MachineState) -> None:
         """Stamp the step's impacts with its end ``time`` (s); read the bodies' velocities for
-        the dissipation."""
+        the dissipation (the arbiter meter reads every body, so ``machine`` is not needed)."""
         if self.recorder is not None:
             self.recorder.time = time
         if self.arbiters is not None:
             self.arbiters.before_step()
 
-    def after_machine_step(self, time: float) -> float:
+    def after_machine_step(self, time: float, machine: MachineState) -> float:
         """Release the held granules whose bond is overloaded; the step's dissipation from the
         arbiters; returns their angular impulse about the axis on the rotor-driven bodies,
         internal units."""
@@ -223,10 +223,10 @@ class RigidContacts:
 
     # --- internals ---------------------------------------------------------------------------
 
-    def _granule_reader(self) -> GranuleReader:
+    def _granule_reader(self) -> BodyReader:
         """The batch reader of the granules present (rebuilt after a change)."""
         if self._reader is None:
-            self._reader = GranuleReader(self.machine.space, self.bodies.granule_bodies)
+            self._reader = BodyReader(self.machine.space, self.bodies.granule_bodies)
         return self._reader
 
     def _changed(self) -> None:

@@ -17,6 +17,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from perga.contact.soft import SoftGranules
@@ -80,6 +81,8 @@ class SoftImpactLog:
         self._hammer_of = hammer_of
         self._hammer_state = hammer_state
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        self._changes = np.empty((0, 3), dtype=np.int64)
+        self._is_hammer = hammer_of >= 0
         self._open: dict[tuple[int, int], _Start] = {}  # (granule id, polygon)
         self._ids_before = ids().copy()
         self._x = granules.x.copy()
@@ -133,14 +136,18 @@ class SoftImpactLog:
         ``angles``: each hammer's body angle now, rad."""
         g = self._g
         hist = g.polygon_hist
-        active = (hist[:, :, HIST_ACTIVE] != 0.0) & (self._hammer_of >= 0)
+        if self._changes.shape[0] < self._active.size:
+            self._changes = np.empty((self._active.size, 3), dtype=np.int64)
+        count = _contact_changes(hist, self._active, self._is_hammer, self._changes)
+        if count == 0:
+            return
         ids = self._ids()
-        for i, k in zip(*np.nonzero(self._active & ~active), strict=True):
-            self._close(int(i), int(ids[i]), int(k), hist[i, k], angles)
-        for i, k in zip(*np.nonzero(active & ~self._active), strict=True):
+        changes = self._changes[:count]
+        for i, k in changes[changes[:, 2] == 0, :2].tolist():
+            self._close(i, int(ids[i]), k, hist[i, k], angles)
+        for i, k in changes[changes[:, 2] == 1, :2].tolist():
             angle = angles[self._hammer_of[k]]
-            self._open[(int(ids[i]), int(k))] = self._start(int(i), int(k), time, angle)
-        self._active = active
+            self._open[(int(ids[i]), k)] = self._start(i, k, time, angle)
 
     def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
         p = self._g.polygons
@@ -203,3 +210,23 @@ class SoftImpactLog:
                 peak_pressure=pressure,
             )
         )
+
+
+@numba.njit(cache=True)
+def _contact_changes(
+    hist: np.ndarray, active: np.ndarray, is_hammer: np.ndarray, out: np.ndarray
+) -> int:
+    """Compare each (granule, polygon) contact flag of the kernel's polygon history with
+    ``active`` (hammer polygons only) and bring ``active`` up to date; the changes go to the
+    rows of ``out`` as (granule row, polygon, 1 opened / 0 closed). Returns their number."""
+    count = 0
+    for i in range(hist.shape[0]):
+        for k in range(hist.shape[1]):
+            now = is_hammer[k] and hist[i, k, HIST_ACTIVE] != 0.0
+            if now != active[i, k]:
+                out[count, 0] = i
+                out[count, 1] = k
+                out[count, 2] = 1 if now else 0
+                count += 1
+                active[i, k] = now
+    return count

@@ -24,17 +24,19 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
-import pymunk
 
 from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
 from perga.engine import units as u
-from perga.engine.machine import Machine
+from perga.engine.machine import Machine, MachineState
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit."""
+FORCE, LENGTH, VELOCITY, ANGULAR_VELOCITY = u.FORCE, u.LENGTH, u.VELOCITY, u.ANGULAR_VELOCITY
+"""The units as module globals, which numba freezes into the compiled functions."""
 
 
 class MachinePolygons:
@@ -48,8 +50,6 @@ class MachinePolygons:
     """
 
     def __init__(self, machine: Machine) -> None:
-        self._rotor = machine.rotor
-        self._bodies = machine.hammer_bodies
         specs = machine.spec.hammers
         chamber = machine.spec.chamber
         walled = chamber is not None and chamber.outline is not None
@@ -58,7 +58,7 @@ class MachinePolygons:
         driven = machine.driven
         relative, owner, kinds, inertia, solid, corner = [], [], [], [], [], []
         for index, (h, body, shapes) in enumerate(
-            zip(specs, self._bodies, machine.hammer_shapes, strict=True)
+            zip(specs, machine.hammer_bodies, machine.hammer_shapes, strict=True)
         ):
             cog = body.center_of_gravity
             pieces = [
@@ -101,12 +101,21 @@ class MachinePolygons:
         self.hammer_of = np.array(owner, dtype=np.int64)
         """The hammer of each polygon (−1: the wall)."""
         self._hammer_polygons = n_hammer
-        self._hammer_vertices = len(self._relative)
-        self._hinges = np.array(
+        hinges = np.array(
             [h.hinge_position if h.mount == "hinged" else (0.0, 0.0) for h in specs], dtype=float
         ).reshape(-1, 2)
         self.machine = np.array([k >= 0 and specs[k].mount != "free" for k in owner], dtype=bool)
         """Which polygons the rotor drives (hinged or welded): their loads enter the drive work."""
+        rows = machine.hammer_rows  # each hammer's body's row in a MachineState
+        self._polygon_rows = rows[self.hammer_of[:n_hammer]]
+        """The state row of each hammer polygon's body (the rotor's for a welded hammer)."""
+        self._vertex_rows = rows[self._owner]
+        """The state row of each hammer vertex's body."""
+        self._polygon_hinges = hinges[self.hammer_of[:n_hammer]]
+        """Each hammer polygon's pivot in the rotor frame, m ((0, 0) unless hinged)."""
+        self._loads = np.zeros((len(machine.bodies), 3))
+        """Force and torque on each machine body, internal units (:meth:`apply_loads`)."""
+        self._set_loads = machine.set_loads
         self.polygons: PolygonSet = polygon_set(
             relative,
             np.array([p.mean(axis=0) for p in relative]),
@@ -116,53 +125,106 @@ class MachinePolygons:
             mat=materials,
             features=(np.concatenate(solid), np.concatenate(corner)),
         )
-        self.pose(0.0)
+        self.pose(0.0, machine.state())
 
-    def pose(self, ahead: float) -> None:
-        """Pose every hammer polygon where its body will be ``ahead`` s from now at its current
-        velocity (positions by v·ahead, angles by ω·ahead), in SI; the wall stays."""
-        state = np.array(
-            [
-                (*b.local_to_world(b.center_of_gravity), b.angle, *b.velocity, b.angular_velocity)
-                for b in self._bodies
-            ],
-            dtype=float,
-        ).reshape(-1, 6)
-        centre = state[:, 0:2] * u.LENGTH
-        velocity = state[:, 3:5] * u.VELOCITY
-        omega = state[:, 5] * u.ANGULAR_VELOCITY
-        centre = centre + velocity * ahead
-        angle = state[:, 2] + omega * ahead
-        c, s = np.cos(angle)[self._owner], np.sin(angle)[self._owner]
-        rx, ry = self._relative[:, 0], self._relative[:, 1]
-        p, of, n = self.polygons, self.hammer_of[: self._hammer_polygons], self._hammer_vertices
-        p.vertices[:n, 0] = centre[self._owner, 0] + c * rx - s * ry
-        p.vertices[:n, 1] = centre[self._owner, 1] + s * rx + c * ry
-        p.com[: len(of)] = centre[of]
-        p.velocity[: len(of)] = velocity[of]
-        p.omega[: len(of)] = omega[of]
-        rotor = self._rotor
-        turn = rotor.angle + rotor.angular_velocity * u.ANGULAR_VELOCITY * ahead
-        cr, sr = math.cos(turn), math.sin(turn)
-        hx, hy = self._hinges[of, 0], self._hinges[of, 1]
-        p.pivot[: len(of), 0] = cr * hx - sr * hy
-        p.pivot[: len(of), 1] = sr * hx + cr * hy
+    def pose(self, ahead: float, state: MachineState) -> None:
+        """Pose every hammer polygon where its body will be ``ahead`` s after ``state`` at its
+        velocity then (positions by v·ahead, angles by ω·ahead), in SI; the wall stays."""
+        p = self.polygons
+        _pose(
+            state.table,
+            self._polygon_rows,
+            self._vertex_rows,
+            self._relative,
+            self._polygon_hinges,
+            ahead,
+            p.vertices,
+            p.com,
+            p.velocity,
+            p.omega,
+            p.pivot,
+        )
 
     def apply_loads(self) -> float:
         """Set the polygons' mean loads (from the last kernel call) as the bodies' force and
         torque for the next Pymunk step; returns the mean moment about the axis on the hammers
         the rotor drives, N·m."""
         p = self.polygons
-        loads: dict[pymunk.Body, list[float]] = {}
-        for k, hammer in enumerate(self.hammer_of[: self._hammer_polygons]):
-            load = loads.setdefault(self._bodies[hammer], [0.0, 0.0, 0.0])
-            load[0] += p.force[k, 0]
-            load[1] += p.force[k, 1]
-            load[2] += p.torque[k]
-        for body, (fx, fy, torque) in loads.items():
-            body.force = (fx / u.FORCE, fy / u.FORCE)
-            body.torque = torque / TORQUE
-        return float(np.sum(p.moment[self.machine]))
+        moment = _sum_loads(
+            p.force, p.torque, p.moment, self._polygon_rows, self.machine, self._loads
+        )
+        self._set_loads(self._loads)
+        return moment
+
+
+@numba.njit(cache=True)
+def _pose(
+    state: np.ndarray,
+    polygon_rows: np.ndarray,
+    vertex_rows: np.ndarray,
+    relative: np.ndarray,
+    hinges: np.ndarray,
+    ahead: float,
+    vertices: np.ndarray,
+    com: np.ndarray,
+    velocity: np.ndarray,
+    omega: np.ndarray,
+    pivot: np.ndarray,
+) -> None:
+    """:meth:`MachinePolygons.pose` in SI from a machine-state table (internal units): vertex j
+    of the hammers' polygons is ``relative[j]`` in the frame of its body (state row
+    ``vertex_rows[j]``) turned by ω·ahead and carried by v·ahead; polygon k takes its body's
+    centre, velocity and ω, and its pivot (``hinges[k]``, rotor frame) turns with the rotor
+    (row 0)."""
+    length, speed, spin = LENGTH, VELOCITY, ANGULAR_VELOCITY
+    for j in range(vertex_rows.size):
+        k = vertex_rows[j]
+        cx = state[k, 0] * length + state[k, 3] * speed * ahead
+        cy = state[k, 1] * length + state[k, 4] * speed * ahead
+        angle = state[k, 2] + state[k, 5] * spin * ahead
+        c, s = math.cos(angle), math.sin(angle)
+        vertices[j, 0] = cx + c * relative[j, 0] - s * relative[j, 1]
+        vertices[j, 1] = cy + s * relative[j, 0] + c * relative[j, 1]
+    turn = state[0, 2] + state[0, 5] * spin * ahead
+    cr, sr = math.cos(turn), math.sin(turn)
+    for i in range(polygon_rows.size):
+        k = polygon_rows[i]
+        com[i, 0] = state[k, 0] * length + state[k, 3] * speed * ahead
+        com[i, 1] = state[k, 1] * length + state[k, 4] * speed * ahead
+        velocity[i, 0] = state[k, 3] * speed
+        velocity[i, 1] = state[k, 4] * speed
+        omega[i] = state[k, 5] * spin
+        pivot[i, 0] = cr * hinges[i, 0] - sr * hinges[i, 1]
+        pivot[i, 1] = sr * hinges[i, 0] + cr * hinges[i, 1]
+
+
+@numba.njit(cache=True)
+def _sum_loads(
+    force: np.ndarray,
+    torque: np.ndarray,
+    moment: np.ndarray,
+    polygon_rows: np.ndarray,
+    driven: np.ndarray,
+    out: np.ndarray,
+) -> float:
+    """Sum the hammer polygons' mean loads (SI) onto their bodies' rows of ``out`` (k, 3:
+    force x, y and torque, internal units); returns the mean moment about the axis of the
+    polygons the rotor drives (``driven``, all polygons), N·m."""
+    out[:] = 0.0
+    for i in range(polygon_rows.size):
+        k = polygon_rows[i]
+        out[k, 0] += force[i, 0]
+        out[k, 1] += force[i, 1]
+        out[k, 2] += torque[i]
+    for k in range(out.shape[0]):
+        out[k, 0] /= FORCE
+        out[k, 1] /= FORCE
+        out[k, 2] /= TORQUE
+    total = 0.0
+    for i in range(driven.size):
+        if driven[i]:
+            total += moment[i]
+    return total
 
 
 def _shifted(corner: np.ndarray, offset: int) -> np.ndarray:

@@ -34,7 +34,7 @@ from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.machine import MachinePolygons
 from perga.contact.soft.threads import free_cores, kernel_threads
 from perga.engine import units as u
-from perga.engine.machine import Machine
+from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
@@ -53,7 +53,7 @@ class _Kinematics:
         return self._g.n
 
     def constants(self) -> tuple[FloatArray, FloatArray]:
-        return self._g.m.copy(), self._g.r.copy()
+        return self._g.m, self._g.r
 
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
         return self._g.v / u.VELOCITY, self._g.x / u.LENGTH if positions else None
@@ -77,6 +77,7 @@ class SoftContacts:
         self.substeps = spec.contact_model.substeps
         self._machine_dt = spec.machine_dt
         self.polygons = MachinePolygons(machine)
+        self._hammer_rows = machine.hammer_rows
         self.threads = kernel_threads(spec.contact_model.threads, len(spec.granules), free_cores())
         """Threads the kernel uses (:mod:`perga.contact.soft.threads`; chosen for the granules
         present at the start)."""
@@ -116,20 +117,22 @@ class SoftContacts:
         """The granules' velocities (the kernel's arrays) in internal units."""
         return _Kinematics(self.granules)
 
-    def before_machine_step(self, time: float) -> None:
-        """Pose the hammers, take the granule steps, load the hammer bodies (module doc)."""
-        self.polygons.pose(self.granule_dt)
+    def before_machine_step(self, time: float, machine: MachineState) -> None:
+        """Pose the hammers from ``machine``, take the granule steps, load the hammer bodies
+        (module doc)."""
+        self.polygons.pose(self.granule_dt, machine)
         if self.log is not None:
             self.log.before()
         self.granules.step(self.substeps)
         moment = self.polygons.apply_loads()
         self._moment = moment * self._machine_dt / ANGULAR_IMPULSE
 
-    def after_machine_step(self, time: float) -> float:
-        """Open and close impacts, report released granules; returns the loads' angular impulse
-        about the axis on the rotor-driven hammers over the step, internal units."""
+    def after_machine_step(self, time: float, machine: MachineState) -> float:
+        """Open and close impacts (hammer angles from ``machine``), report released granules;
+        returns the loads' angular impulse about the axis on the rotor-driven hammers over the
+        step, internal units."""
         if self.log is not None:
-            self.log.after(time, np.array([b.angle for b in self.machine.hammer_bodies]))
+            self.log.after(time, machine.angle[self._hammer_rows])
         g = self.granules
         if not self._bonds:
             return self._moment

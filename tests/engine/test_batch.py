@@ -1,4 +1,4 @@
-"""Batch state reads and velocity writes (perga.contact.rigid.batch) against per-body reads and
+"""Batch state reads and velocity writes (perga.engine.batch) against per-body reads and
 writes in a Python loop.
 
 Tolerance: exact. The reader multiplies the very float64 values Chipmunk holds by the same unit
@@ -14,15 +14,15 @@ from typing import NamedTuple
 import numpy as np
 import pymunk
 import pytest
-from tests.engine.helpers import plate
 
-from perga.contact.rigid import batch as state_module
-from perga.contact.rigid.batch import GranuleReader, GranuleWriter
 from perga.contact.rigid.bodies import RigidBodies, attach_bodies
 from perga.engine import Simulation
+from perga.engine import batch as state_module
 from perga.engine import units as u
+from perga.engine.batch import BodyReader, BodyWriter
 from perga.engine.machine import build_machine
 from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from tests.engine.helpers import plate
 
 OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s
 RADIUS = 1.5e-3  # m
@@ -132,18 +132,18 @@ def test_scene_is_a_real_test(stepped: Simulation) -> None:
 
 
 def test_matches_python_loop_exactly(stepped: Simulation) -> None:
-    reader = GranuleReader(*_parts(stepped.contacts.bodies))
+    reader = BodyReader(*_parts(stepped.contacts.bodies))
     expected = _loop(stepped)
     _assert_same(Kinematics(*reader.read()), expected)
     np.testing.assert_array_equal(reader.positions(), expected.positions)
     np.testing.assert_array_equal(reader.velocities(), expected.velocities)
     np.testing.assert_array_equal(reader.angular_velocities(), expected.angular_velocities)
-    _assert_same(Kinematics(*GranuleReader(*_parts(stepped.contacts.bodies)).read()), expected)
+    _assert_same(Kinematics(*BodyReader(*_parts(stepped.contacts.bodies)).read()), expected)
 
 
 def test_matches_loop_while_stepping() -> None:
     sim = Simulation(_spec(n_rings=2))
-    reader = GranuleReader(*_parts(sim.contacts.bodies))
+    reader = BodyReader(*_parts(sim.contacts.bodies))
     for _ in range(5):
         sim.run(4e-4)
         _assert_same(Kinematics(*reader.read()), _loop(sim))
@@ -151,7 +151,7 @@ def test_matches_loop_while_stepping() -> None:
 
 def test_rows_are_in_spec_order() -> None:
     spec = _spec(n_rings=2)
-    reader = GranuleReader(*_parts(attach_bodies(build_machine(spec))))
+    reader = BodyReader(*_parts(attach_bodies(build_machine(spec))))
     state = Kinematics(*reader.read())
     assert reader.count == len(spec.granules) == state.positions.shape[0]
     for i, g in enumerate(spec.granules):
@@ -167,30 +167,34 @@ def test_rows_are_in_spec_order() -> None:
 
 def test_survives_reordering_of_chipmunks_body_array() -> None:
     sim = Simulation(_spec(n_rings=2))
-    reader = GranuleReader(*_parts(sim.contacts.bodies))
+    reader = BodyReader(*_parts(sim.contacts.bodies))
     sim.run(2e-4)
     _assert_same(Kinematics(*reader.read()), _loop(sim))
     # removing a body moves Chipmunk's last body into its slot; Pymunk creates and adds
-    # space.static_body on first access: both change the rows of the batch read
+    # space.static_body on first access: both change the rows of the batch read (the machine
+    # then lacks a hammer, so the space is stepped on its own)
+    rows = reader._rows.copy()
     free = sim.machine.hammer_bodies[-1]
     sim.machine.space.remove(free, *free.shapes)
     assert sim.machine.space.static_body is not None
-    sim.run(2e-4)
+    for _ in range(4):
+        sim.machine.space.step(u.to_internal(sim.dt, u.TIME))
     _assert_same(Kinematics(*reader.read()), _loop(sim))
+    assert not np.array_equal(reader._rows, rows)  # the rows did move
 
 
 def test_granule_missing_from_space_is_an_error() -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    reader = GranuleReader(*_parts(scene))
+    reader = BodyReader(*_parts(scene))
     body = scene.granule_bodies[3]
     scene.space.remove(body, *body.shapes)
-    with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
+    with pytest.raises(LookupError, match=r"bodies \[3\]"):
         reader.positions()
 
 
 def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    reader = GranuleReader(*_parts(scene))
+    reader = BodyReader(*_parts(scene))
     real = state_module.pb.get_space_bodies
 
     def short(space: pymunk.Space, fields: object, buffer: object) -> None:
@@ -210,7 +214,7 @@ def test_no_granules() -> None:
         contacts=(),
         granule_dt=1e-5,
     )
-    state = Kinematics(*GranuleReader(*_parts(attach_bodies(build_machine(spec)))).read())
+    state = Kinematics(*BodyReader(*_parts(attach_bodies(build_machine(spec)))).read())
     assert state.positions.shape == (0, 2)
     assert state.velocities.shape == (0, 2)
     assert state.angular_velocities.shape == (0,)
@@ -233,9 +237,7 @@ def _others(scene: RigidBodies) -> list[tuple[float, ...]]:
 
 def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
     scene = stepped.contacts.bodies
-    writer = GranuleWriter(
-        *_parts(scene)
-    )  # its construction check writes and undoes: nothing changes
+    writer = BodyWriter(*_parts(scene))  # its construction check writes and undoes: nothing changes
     before, others = _loop(stepped), _others(scene)
     _assert_same(Kinematics(*writer.read()), before)
     v, p = writer.read_internal(positions=True)
@@ -259,11 +261,12 @@ def test_writer_sets_granule_velocities_only(stepped: Simulation) -> None:
 
 def test_writer_survives_reordering() -> None:
     sim = Simulation(_spec(n_rings=2))
-    writer = GranuleWriter(*_parts(sim.contacts.bodies))
+    writer = BodyWriter(*_parts(sim.contacts.bodies))
     free = sim.machine.hammer_bodies[-1]
     sim.machine.space.remove(free, *free.shapes)
     assert sim.machine.space.static_body is not None
-    sim.run(2e-4)
+    for _ in range(4):  # the machine lacks a hammer now: the space is stepped on its own
+        sim.machine.space.step(u.to_internal(sim.dt, u.TIME))
     others = _others(sim.contacts.bodies)
     new = np.arange(2.0 * writer.count).reshape(-1, 2)
     writer.write_internal_velocities(new)
@@ -275,7 +278,7 @@ def test_writer_survives_reordering() -> None:
 
 def test_writer_rejects_bad_velocities() -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    writer = GranuleWriter(*_parts(scene))
+    writer = BodyWriter(*_parts(scene))
     before = _everything(scene)
     v, _ = writer.read_internal(positions=False)
     with pytest.raises(ValueError, match="shape"):
@@ -283,26 +286,26 @@ def test_writer_rejects_bad_velocities() -> None:
     with pytest.raises(ValueError, match="shape"):
         writer.write_internal_velocities(v.ravel())
     v[2, 1] = np.nan
-    with pytest.raises(ValueError, match=r"non-finite velocities for granules \[2\]"):
+    with pytest.raises(ValueError, match=r"non-finite velocities for bodies \[2\]"):
         writer.write_internal_velocities(v)
     assert _everything(scene) == before
 
 
 def test_writer_granule_missing_from_space_is_an_error() -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    writer = GranuleWriter(*_parts(scene))
+    writer = BodyWriter(*_parts(scene))
     v, _ = writer.read_internal(positions=False)
     body = scene.granule_bodies[3]
     scene.space.remove(body, *body.shapes)
     before = _everything(scene)
-    with pytest.raises(LookupError, match=r"granule bodies \[3\]"):
+    with pytest.raises(LookupError, match=r"bodies \[3\]"):
         writer.write_internal_velocities(v)
     assert _everything(scene) == before
 
 
 def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    writer = GranuleWriter(*_parts(scene))
+    writer = BodyWriter(*_parts(scene))
     v, _ = writer.read_internal(positions=False)
     real = state_module.pb.get_space_bodies
 
@@ -332,7 +335,7 @@ def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: 
 
     monkeypatch.setattr(state_module.pb, "set_space_bodies", faulty)
     with pytest.raises(RuntimeError, match="set_space_bodies check failed"):
-        GranuleWriter(*_parts(scene))
+        BodyWriter(*_parts(scene))
 
 
 def test_writer_no_granules() -> None:
@@ -344,7 +347,7 @@ def test_writer_no_granules() -> None:
         granule_dt=1e-5,
     )
     scene = attach_bodies(build_machine(spec))
-    writer = GranuleWriter(*_parts(scene))
+    writer = BodyWriter(*_parts(scene))
     v, p = writer.read_internal(positions=True)
     assert v.shape == (0, 2) and p is not None and p.shape == (0, 2)
     writer.write_internal_velocities(np.zeros((0, 2)))

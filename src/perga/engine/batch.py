@@ -1,51 +1,54 @@
-"""Bulk, checked reads of the granules' state, and the one bulk write of their velocities, through
-``pymunk.batch`` (with the arbiter meter, :mod:`perga.contact.rigid.dissipation`, the places it
-is used).
+"""Bulk, checked reads of chosen bodies' state (the rigid granules, the machine's rotor and
+hammers), and the one bulk write of their velocities, through ``pymunk.batch`` (with the arbiter
+meter, :mod:`perga.contact.rigid.dissipation`, the places it is used).
 
-Reading ``body.position`` for every granule in a Python loop costs an attribute access per
+Reading ``body.position`` for every body in a Python loop costs an attribute access per
 body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
-(docs/performance.md has the gain). The batch API is experimental, so it is wrapped here and
+(docs/performance.md has the gain: 3 µs against 12 µs for the seven bodies of a machine, far
+more for thousands of granules). The batch API is experimental, so it is wrapped here and
 nowhere else, with these properties:
 
 * **It cannot select bodies.** ``get_space_bodies`` walks Chipmunk's body arrays: every
   dynamic *and kinematic* body (the rotor and hinged hammers as well as the granules; Chipmunk
   keeps kinematic bodies in its "dynamic" array), then the static ones (including
   ``space.static_body`` once Pymunk has created it), then sleeping bodies. There is no filter
-  argument, so :class:`GranuleReader` reads every body together with its ``BODY_ID`` and picks
-  the granule rows with an index array computed once from the granule bodies' ids.
+  argument, so :class:`BodyReader` reads every body together with its ``BODY_ID`` and picks
+  the chosen bodies' rows with an index array computed once from their ids.
 * **The row order is not fixed.** Chipmunk removes a body by moving the last body of the array
   into its slot, and Pymunk adds ``space.static_body`` on first access. The reader therefore
-  checks on every read, vectorised, that the ids at the cached rows are the granules' ids, and
-  recomputes the rows (a sort and a binary search, no Python loop) when they are not. A granule
-  body that is no longer in the space raises :class:`LookupError`. There is no slow fallback:
+  checks on every read, vectorised, that the ids at the cached rows are the chosen bodies' ids,
+  and recomputes the rows (a sort and a binary search, no Python loop) when they are not. A
+  chosen body that is no longer in the space raises :class:`LookupError`. There is no slow fallback:
   the only path is batch + index.
 * **Buffers are checked.** The id buffer must hold one entry per body and the float buffer
   exactly ``len(fields)`` numbers per body, in the field order of the flags' bit values
   (position, angle, velocity, angular velocity); otherwise :class:`RuntimeError`. Building a
   reader also compares one read against the bodies' own properties, so a change of the
   experimental layout in a future Pymunk fails loudly instead of returning shifted numbers.
-* **Writing is velocities only, through** :class:`GranuleWriter`. ``pymunk.batch.
+* **Writing is velocities only, through** :class:`BodyWriter`. ``pymunk.batch.
   set_space_bodies`` writes to *every* body (kinematic rotor, hammers, static bodies included),
   in the order of the body walk, and does not check the buffer length (a short buffer wrote
   NaN). The writer therefore never writes from a buffer of its own making: immediately before
   each write it reads every body's velocity and id into the batch buffer (one C pass), checks
-  the ids and the buffer size as for a read, replaces only the granule rows and writes that
+  the ids and the buffer size as for a read, replaces only the chosen bodies' rows and writes that
   same buffer back, so every other body gets back the bits it holds. Only ``VELOCITY`` is
   written (positions are not: Chipmunk returns a position through the body's transform, which
   is not guaranteed to reproduce the stored bits for a body with an offset centre of gravity).
-  Building a writer checks, once, that a write lands in the granule rows the reader found and
+  Building a writer checks, once, that a write lands in the rows the reader found and
   nowhere else (a marked write, read back per body, then undone).
 
 Values are copies (the batch buffer is reused), converted to SI by one multiplication by the
 unit of :mod:`perga.engine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
-gives. Rows are in the spec's granule order. :class:`GranuleWriter` works in Chipmunk's
+gives. Rows are in the order of the bodies given. :class:`BodyWriter` works in Chipmunk's
 internal units on both sides (its client, the effects' kicks, computes in them).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 import pymunk
 import pymunk.batch as pb
@@ -64,23 +67,32 @@ _WIDTH: dict[pb.BodyFields, int] = {
     _F.VELOCITY: 2,
     _F.ANGULAR_VELOCITY: 1,
 }
+# field sets built once (enum arithmetic costs about a microsecond each time)
+_ALL = _F.POSITION | _F.ANGLE | _F.VELOCITY | _F.ANGULAR_VELOCITY
+_MOTION = _F.POSITION | _F.VELOCITY | _F.ANGULAR_VELOCITY
+_PV = _F.POSITION | _F.VELOCITY
+_V_ID = _F.VELOCITY | _F.BODY_ID
+_LOADS = _F.FORCE | _F.TORQUE
+_LOADS_ID = _LOADS | _F.BODY_ID
 
 
-def _columns(fields: pb.BodyFields) -> dict[pb.BodyFields, slice]:
-    """Column slice of each requested field in a row of the float buffer."""
-    out: dict[pb.BodyFields, slice] = {}
+@functools.cache
+def _layout(fields: pb.BodyFields) -> tuple[pb.BodyFields, int, tuple[slice, ...]]:
+    """The fields to fetch (``fields`` and BODY_ID), the floats per body and the column slice of
+    each requested field in a row of the float buffer (cached: enum arithmetic is slow)."""
+    columns = []
     start = 0
     for flag in sorted(_WIDTH, key=lambda f: f.value):
         if flag in fields:
-            out[flag] = slice(start, start + _WIDTH[flag])
+            columns.append(slice(start, start + _WIDTH[flag]))
             start += _WIDTH[flag]
-    return out
+    return fields | _F.BODY_ID, start, tuple(columns)
 
 
-class GranuleReader:
-    """Reads the granule bodies ``bodies`` of ``space`` through ``pymunk.batch``.
+class BodyReader:
+    """Reads the bodies ``bodies`` of ``space`` through ``pymunk.batch``, rows in their order.
 
-    Build it once per space (it records the granule bodies' ids and verifies the batch layout
+    Build it once per space (it records the bodies' ids and verifies the batch layout
     once) and call it as often as needed; each call is one C pass over the space's bodies plus
     a few numpy operations.
     """
@@ -90,7 +102,7 @@ class GranuleReader:
         self._bodies = list(bodies)
         self._ids = np.array([b.id for b in self._bodies], dtype=np.uintp)
         if np.unique(self._ids).size != self._ids.size:
-            raise ValueError("granule bodies are not distinct")
+            raise ValueError("bodies are not distinct")
         self._buffer = pb.Buffer()
         self._rows = np.zeros(0, dtype=np.intp)
         if self._bodies:
@@ -98,53 +110,58 @@ class GranuleReader:
 
     @property
     def count(self) -> int:
-        """Number of granules."""
+        """Number of bodies read."""
         return len(self._bodies)
 
     def positions(self) -> FloatArray:
-        """Granule centres, (n, 2), m."""
+        """Positions of the bodies' local origins (a granule's centre), (n, 2), m."""
         (p,) = self._read(_F.POSITION)
         return p * u.LENGTH
 
     def velocities(self) -> FloatArray:
-        """Granule centre velocities, (n, 2), m/s."""
+        """Velocities of the centres of gravity, (n, 2), m/s."""
         (v,) = self._read(_F.VELOCITY)
         return v * u.VELOCITY
 
     def angular_velocities(self) -> FloatArray:
-        """Granule angular velocities, (n,), rad/s."""
+        """Angular velocities, (n,), rad/s."""
         (w,) = self._read(_F.ANGULAR_VELOCITY)
         return w[:, 0] * u.ANGULAR_VELOCITY
 
     def read(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Positions (n, 2), m, velocities (n, 2), m/s, and angular velocities (n,), rad/s,
         from a single pass."""
-        p, v, w = self._read(_F.POSITION | _F.VELOCITY | _F.ANGULAR_VELOCITY)
+        p, v, w = self._read(_MOTION)
         return p * u.LENGTH, v * u.VELOCITY, w[:, 0] * u.ANGULAR_VELOCITY
+
+    def read_internal_table(self) -> FloatArray:
+        """One row per body, internal units, from a single pass: x, y (position), angle, vx, vy
+        (velocity), ω (angular velocity); a fresh (n, 6) array."""
+        fetch, width, _ = _layout(_ALL)
+        if not self._bodies:
+            return np.zeros((0, width))
+        ids, floats = self._fetch(fetch, width)
+        out = np.empty((len(self._bodies), width))
+        _take_rows(floats, width, self._rows_of(ids), out)
+        return out
 
     # --- internals ---------------------------------------------------------------------------
 
     def _read(self, fields: pb.BodyFields) -> list[FloatArray]:
-        """The granule rows of each requested field (internal units, ascending flag order),
+        """The chosen bodies' rows of each requested field (internal units, ascending flag order),
         each a fresh (n, width) array."""
-        columns = _columns(fields)
+        fetch, width, columns = _layout(fields)
         if not self._bodies:
-            return [np.zeros((0, c.stop - c.start)) for c in columns.values()]
-        width = sum(c.stop - c.start for c in columns.values())
-        ids, floats = self._fetch(fields | _F.BODY_ID, width)
-        table = floats.reshape(ids.size, width)[self._granule_rows(ids)]  # fancy indexing: a copy
-        return [table[:, c] for c in columns.values()]
+            return [np.zeros((0, c.stop - c.start)) for c in columns]
+        ids, floats = self._fetch(fetch, width)
+        table = floats.reshape(ids.size, width)[self._rows_of(ids)]  # fancy indexing: a copy
+        return [table[:, c] for c in columns]
 
-    def _granule_rows(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
-        """The granules' rows in a batch read whose id column is ``ids`` (cached, checked)."""
-        rows = self._rows
-        if (
-            rows.size != self._ids.size
-            or rows.max() >= ids.size
-            or not (np.array_equal(ids[rows], self._ids))
-        ):
-            rows = self._rows = self._locate(ids)
-        return rows
+    def _rows_of(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
+        """The chosen bodies' rows in a batch read whose id column is ``ids`` (cached, checked)."""
+        if not _rows_hold(ids, self._rows, self._ids):
+            self._rows = self._locate(ids)
+        return self._rows
 
     def _fetch(
         self, fields: pb.BodyFields, width: int, buffer: pb.Buffer | None = None
@@ -166,7 +183,7 @@ class GranuleReader:
         return ids, floats
 
     def _locate(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
-        """Row of each granule body in a batch read whose id column is ``ids``."""
+        """Row of each chosen body in a batch read whose id column is ``ids``."""
         if ids.size == 0:
             missing = np.arange(self._ids.size)
         else:
@@ -177,31 +194,31 @@ class GranuleReader:
             missing = np.flatnonzero(ids[rows] != self._ids)
         if missing.size:
             raise LookupError(
-                f"granule bodies {missing[:10].tolist()} (spec indices) are not in the space"
+                f"bodies {missing[:10].tolist()} (indices in the reader's list) are not in "
+                "the space"
             )
         return rows.astype(np.intp)
 
     def _verify_layout(self) -> None:
-        """Compare one full read against the first and last granule's own properties."""
-        fields = _F.POSITION | _F.ANGLE | _F.VELOCITY | _F.ANGULAR_VELOCITY
-        p, a, v, w = self._read(fields)
+        """Compare one full read against the first and last body's own properties."""
+        p, a, v, w = self._read(_ALL)
         for i in {0, len(self._bodies) - 1}:
             b = self._bodies[i]
             expected = [*b.position, b.angle, *b.velocity, b.angular_velocity]
             got = [*p[i], *a[i], *v[i], *w[i]]
             if not np.array_equal(got, expected, equal_nan=True):
                 raise RuntimeError(
-                    f"pymunk.batch layout check failed for granule {i}: read {got}, the body "
+                    f"pymunk.batch layout check failed for body {i}: read {got}, the body "
                     f"holds {expected} (position, angle, velocity, angular velocity)"
                 )
 
 
-class GranuleWriter(GranuleReader):
-    """A :class:`GranuleReader` that can also set all granules' velocities in one batch write.
+class BodyWriter(BodyReader):
+    """A :class:`BodyReader` that can also set all its bodies' velocities in one batch write.
 
     Both :meth:`read_internal` and :meth:`write_internal_velocities` work in Chipmunk's internal
     units (mm/ms, mm). A write reads every body's velocity first and writes those bits back to
-    every body but the granules (module docstring), so it is safe at any time between steps;
+    every other body (module docstring), so it is safe at any time between steps;
     it is not meant for use inside ``space.step`` callbacks.
     """
 
@@ -215,35 +232,45 @@ class GranuleWriter(GranuleReader):
         """Granule velocities (n, 2), internal units, and their positions (n, 2) if asked for
         (else None), from one batch pass. Fresh arrays."""
         if positions:
-            p, v = self._read(_F.POSITION | _F.VELOCITY)
+            p, v = self._read(_PV)
             return v, p
         (v,) = self._read(_F.VELOCITY)
         return v, None
 
     def write_internal_velocities(self, velocities: FloatArray) -> None:
-        """Set every granule's velocity (rows in spec order, (n, 2), internal units, finite);
-        every other body keeps its velocity bit for bit."""
+        """Set every chosen body's velocity (rows in the reader's order, (n, 2), internal units,
+        finite); every other body keeps its velocity bit for bit."""
         new = np.asarray(velocities, dtype=np.float64)
         if new.shape != (len(self._bodies), 2):
             raise ValueError(
-                f"expected granule velocities of shape ({len(self._bodies)}, 2), got {new.shape}"
+                f"expected velocities of shape ({len(self._bodies)}, 2), got {new.shape}"
             )
         if not np.isfinite(new).all():
             bad = np.flatnonzero(~np.isfinite(new).all(axis=1))
-            raise ValueError(f"non-finite velocities for granules {bad[:10].tolist()}")
+            raise ValueError(f"non-finite velocities for bodies {bad[:10].tolist()}")
         if not self._bodies:
             return
         buffer = self._write_buffer
-        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
-        floats.reshape(ids.size, 2)[self._granule_rows(ids)] = new
+        ids, floats = self._fetch(_V_ID, 2, buffer)
+        floats.reshape(ids.size, 2)[self._rows_of(ids)] = new
         # the buffer holds exactly 2 floats per body in the walk's order, read just now
         pb.set_space_bodies(self._space, _F.VELOCITY, buffer)
 
+    def write_internal_loads(self, loads: FloatArray) -> None:
+        """Set every chosen body's force and torque for the next step from ``loads`` (n, 3):
+        fx, fy, torque, internal units, in one batch write (every other body keeps its own)."""
+        if not self._bodies:
+            return
+        buffer = self._write_buffer
+        ids, floats = self._fetch(_LOADS_ID, 3, buffer)
+        _put_rows(floats, 3, self._rows_of(ids), loads)
+        pb.set_space_bodies(self._space, _LOADS, buffer)
+
     def _verify_write(self) -> None:
-        """Write marked velocities to the first and last granule, check that exactly those
+        """Write marked velocities to the first and last body, check that exactly those
         bodies changed (per-body getters for them, a batch read for all), then undo it."""
         buffer = self._write_buffer
-        ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+        ids, floats = self._fetch(_V_ID, 2, buffer)
         before_ids, before = ids.copy(), floats.reshape(-1, 2).copy()
         (original,) = self._read(_F.VELOCITY)
         marked = original.copy()
@@ -252,9 +279,9 @@ class GranuleWriter(GranuleReader):
             marked[i] = original[i] + (1.0 + k, -2.0 - k)
         try:
             self.write_internal_velocities(marked)
-            ids, floats = self._fetch(_F.VELOCITY | _F.BODY_ID, 2, buffer)
+            ids, floats = self._fetch(_V_ID, 2, buffer)
             expected = before.copy()
-            rows = self._granule_rows(before_ids)
+            rows = self._rows_of(before_ids)
             expected[rows[ends]] = marked[ends]
             per_body = [tuple(self._bodies[i].velocity) for i in ends]
             if (
@@ -263,7 +290,7 @@ class GranuleWriter(GranuleReader):
                 or per_body != [tuple(marked[i]) for i in ends]
             ):
                 raise RuntimeError(
-                    "pymunk.batch.set_space_bodies check failed: a marked write of granules "
+                    "pymunk.batch.set_space_bodies check failed: a marked write of bodies "
                     f"{ends} did not land in their rows only (the experimental batch layout "
                     "has changed)"
                 )
@@ -271,3 +298,32 @@ class GranuleWriter(GranuleReader):
             self.write_internal_velocities(original)
         if [tuple(self._bodies[i].velocity) for i in ends] != [tuple(original[i]) for i in ends]:
             raise RuntimeError("pymunk.batch.set_space_bodies check failed: undo did not restore")
+
+
+@numba.njit(cache=True)
+def _rows_hold(ids: np.ndarray, rows: np.ndarray, expected: np.ndarray) -> bool:
+    """Whether ``rows`` of a batch read whose id column is ``ids`` hold the ids ``expected``."""
+    if rows.size != expected.size:
+        return False
+    for j in range(rows.size):  # noqa: SIM110 (numba: no generators in all())
+        if rows[j] >= ids.size or ids[rows[j]] != expected[j]:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _take_rows(floats: np.ndarray, width: int, rows: np.ndarray, out: np.ndarray) -> None:
+    """Copy body ``rows[j]`` of the flat float buffer (``width`` per body) into ``out[j]``."""
+    for j in range(rows.size):
+        base = rows[j] * width
+        for c in range(width):
+            out[j, c] = floats[base + c]
+
+
+@numba.njit(cache=True)
+def _put_rows(floats: np.ndarray, width: int, rows: np.ndarray, values: np.ndarray) -> None:
+    """Copy ``values[j]`` into body ``rows[j]`` of the flat float buffer (``width`` per body)."""
+    for j in range(rows.size):
+        base = rows[j] * width
+        for c in range(width):
+            floats[base + c] = values[j, c]
