@@ -49,10 +49,10 @@ from __future__ import annotations
 
 import itertools
 import os
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
 from typing import BinaryIO
+from xml.sax.saxutils import escape
 
 import numpy as np
 import pyvista as pv
@@ -85,6 +85,8 @@ class PvdSeries:
         self.name = name
         self.comment = comment
         self.entries: list[tuple[float, str]] = []
+        self._lines: list[str] = []
+        """The index's DataSet lines so far (the text is rebuilt from them, not from a tree)."""
 
     @property
     def path(self) -> Path:
@@ -96,15 +98,22 @@ class PvdSeries:
         file = f"{self.name}_{len(self.entries):06d}.vtu"
         mesh.save(self.directory / file, binary=True, compression="zlib")
         self.entries.append((time, file))
-        root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
-        if self.comment:
-            root.append(ET.Comment(f" {self.comment} "))
-        collection = ET.SubElement(root, "Collection")
-        for t, f in self.entries:
-            ET.SubElement(collection, "DataSet", timestep=repr(t), group="", part="0", file=f)
-        ET.indent(root)
+        self._lines.append(
+            f'    <DataSet timestep="{float(time)!r}" group="" part="0" file="{escape(file)}" />\n'
+        )
+        comment = f"  <!-- {self.comment} -->\n" if self.comment else ""
+        text = "".join(
+            [
+                "<?xml version='1.0' encoding='utf-8'?>\n",
+                '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n',
+                comment,
+                "  <Collection>\n",
+                *self._lines,
+                "  </Collection>\n</VTKFile>",
+            ]
+        )
         temporary = self.path.with_suffix(".pvd.tmp")
-        ET.ElementTree(root).write(temporary, encoding="utf-8", xml_declaration=True)
+        temporary.write_text(text, encoding="utf-8")
         os.replace(temporary, self.path)
 
 
