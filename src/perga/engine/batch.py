@@ -46,6 +46,7 @@ internal units on both sides (its client, the effects' kicks, computes in them).
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
 
 import numba
@@ -134,16 +135,17 @@ class BodyReader:
         p, v, w = self._read(_MOTION)
         return p * u.LENGTH, v * u.VELOCITY, w[:, 0] * u.ANGULAR_VELOCITY
 
-    def read_internal_table(self) -> FloatArray:
-        """One row per body, internal units, from a single pass: x, y (position), angle, vx, vy
-        (velocity), ω (angular velocity); a fresh (n, 6) array."""
+    def read_internal_space(self) -> tuple[NDArray[np.uintp], FloatArray, FloatArray]:
+        """Every body of the space and the chosen ones, internal units, from a single pass: the
+        ids of all bodies (in the batch walk's order), their rows (n_all, 6) and the chosen
+        bodies' rows (n, 6), each x, y (position), angle, vx, vy (velocity), ω (angular
+        velocity); fresh arrays."""
         fetch, width, _ = _layout(_ALL)
-        if not self._bodies:
-            return np.zeros((0, width))
         ids, floats = self._fetch(fetch, width)
         out = np.empty((len(self._bodies), width))
-        _take_rows(floats, width, self._rows_of(ids), out)
-        return out
+        if self._bodies:
+            _take_rows(floats, width, self._rows_of(ids), out)
+        return ids.copy(), floats.reshape(ids.size, width).copy(), out
 
     # --- internals ---------------------------------------------------------------------------
 
@@ -231,11 +233,12 @@ class BodyWriter(BodyReader):
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
         """Granule velocities (n, 2), internal units, and their positions (n, 2) if asked for
         (else None), from one batch pass. Fresh arrays."""
-        if positions:
-            p, v = self._read(_PV)
-            return v, p
-        (v,) = self._read(_F.VELOCITY)
-        return v, None
+        fetch, width, _ = _layout(_PV if positions else _F.VELOCITY)
+        ids, floats = self._fetch(fetch, width)
+        out = np.empty((len(self._bodies), width))
+        if self._bodies:
+            _take_rows(floats, width, self._rows_of(ids), out)
+        return (out[:, 2:4], out[:, 0:2]) if positions else (out, None)
 
     def write_internal_velocities(self, velocities: FloatArray) -> None:
         """Set every chosen body's velocity (rows in the reader's order, (n, 2), internal units,
@@ -245,14 +248,14 @@ class BodyWriter(BodyReader):
             raise ValueError(
                 f"expected velocities of shape ({len(self._bodies)}, 2), got {new.shape}"
             )
-        if not np.isfinite(new).all():
+        if not _finite(new):
             bad = np.flatnonzero(~np.isfinite(new).all(axis=1))
             raise ValueError(f"non-finite velocities for bodies {bad[:10].tolist()}")
         if not self._bodies:
             return
         buffer = self._write_buffer
         ids, floats = self._fetch(_V_ID, 2, buffer)
-        floats.reshape(ids.size, 2)[self._rows_of(ids)] = new
+        _put_rows(floats, 2, self._rows_of(ids), new)
         # the buffer holds exactly 2 floats per body in the walk's order, read just now
         pb.set_space_bodies(self._space, _F.VELOCITY, buffer)
 
@@ -308,6 +311,16 @@ def _rows_hold(ids: np.ndarray, rows: np.ndarray, expected: np.ndarray) -> bool:
     for j in range(rows.size):  # noqa: SIM110 (numba: no generators in all())
         if rows[j] >= ids.size or ids[rows[j]] != expected[j]:
             return False
+    return True
+
+
+@numba.njit(cache=True)
+def _finite(values: np.ndarray) -> bool:
+    """Whether every entry of the 2-D array ``values`` is finite."""
+    for j in range(values.shape[0]):
+        for c in range(values.shape[1]):
+            if not math.isfinite(values[j, c]):
+                return False
     return True
 
 

@@ -55,9 +55,15 @@ class MachineState:
     """The machine's bodies at one instant (:attr:`Machine.bodies`: row 0 the rotor, then the
     hammer bodies that are not the rotor), internal units (:mod:`perga.engine.units`), from one
     ``pymunk.batch`` read: ``table`` (k, 6), per body x, y (its centre of gravity in the world),
-    angle, vx, vy (velocity of the centre of gravity), ω. Compiled code takes the table."""
+    angle, vx, vy (velocity of the centre of gravity), ω. Compiled code takes the table.
+
+    The same read of every body in the space (granule bodies of the rigid model included):
+    ``space_ids`` their ids in the batch walk's order, ``space`` (n, 6) x, y (the body's
+    position, its local origin), angle, vx, vy, ω."""
 
     table: FloatArray
+    space_ids: NDArray[np.uintp]
+    space: FloatArray
 
     @property
     def centre(self) -> FloatArray:
@@ -132,9 +138,9 @@ class Machine:
             bodies = self.bodies
             self._reader = BodyWriter(self.space, bodies)
             self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
-        table = self._reader.read_internal_table()
+        ids, space, table = self._reader.read_internal_space()
         _to_centres(table, self._cogs)
-        return MachineState(table)
+        return MachineState(table, ids, space)
 
     def set_loads(self, loads: FloatArray) -> None:
         """Set the force and torque of every body of :attr:`bodies` for the next step from

@@ -15,11 +15,13 @@ Per contact the dissipated energy is −J·(v̄_a − v̄_b), J the arbiter's to
   velocities), so the split is exact to first order in dt; Chipmunk's position correction
   (``v_bias``) moves bodies without changing velocities and is not an energy term.
 
-How the contact term is measured: no Python callback. :meth:`ArbiterMeter.before_step` reads
-every body's velocity with one ``pymunk.batch`` pass; :meth:`ArbiterMeter.after_step` reads the
-space's arbiters (bodies, contact count, total impulse, normal, first contact point on each
-shape) and, if any touches, every body's position, angle and velocity, and evaluates the sum
-in numpy. Facts of Pymunk 7.3.1's batch API this relies on, each checked against the
+How the contact term is measured: no Python callback. :meth:`ArbiterMeter.before_step` keeps
+every body's velocity from the simulation's read of the whole space before the step
+(:class:`~perga.engine.machine.MachineState`, one ``pymunk.batch`` pass);
+:meth:`ArbiterMeter.after_step` reads the space's arbiters (bodies, contact count, total
+impulse, normal, first contact point on each shape) and, if any touches, takes every body's
+position, angle and velocity from the read after the step, and evaluates the sum in compiled
+code. Facts of Pymunk 7.3.1's batch API this relies on, each checked against the
 per-contact callbacks it replaces (``tests/contact/rigid/test_dissipation.py``):
 
 * The arbiter list is Chipmunk's arbiter cache: besides the contacts solved in this step it
@@ -46,24 +48,23 @@ per-contact callbacks it replaces (``tests/contact/rigid/test_dissipation.py``):
 The per-contact terms are summed exactly rounded (``math.fsum``), so that the totals do not
 depend on the order in which Chipmunk lists its arbiters, which varies from run to run.
 
-Costs per step: two body reads and one arbiter read (C passes) and numpy over the touching
-contacts.
+Costs per step: one arbiter read (a C pass), a few numpy operations and one compiled loop over
+the touching contacts.
 """
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
-from perga.engine.machine import Machine
+from perga.engine.machine import Machine, MachineState
 
 _B = pb.BodyFields
 _A = pb.ArbiterFields
-_BEFORE = _B.BODY_ID | _B.VELOCITY | _B.ANGULAR_VELOCITY  # floats: vx vy w
-_AFTER = _B.BODY_ID | _B.POSITION | _B.ANGLE | _B.VELOCITY | _B.ANGULAR_VELOCITY  # x y a vx vy w
 # ints: id_a id_b count; floats: J (2), normal (2), point a (2), point b (2)
 _ARBITERS = (
     _A.BODY_A_ID | _A.BODY_B_ID | _A.CONTACT_COUNT | _A.TOTAL_IMPULSE | _A.NORMAL
@@ -84,41 +85,26 @@ class ArbiterMeter:
         self.dissipated = 0.0
         """Energy the contacts dissipated since the meter was built, internal units."""
         self._moment = 0.0  # contact angular impulse on rotor-driven bodies this step
-        self._body_buffer = pb.Buffer()
         self._arbiter_buffer = pb.Buffer()
         self._ids0: NDArray[np.uintp] = np.zeros(0, dtype=np.uintp)
-        self._table0: NDArray[np.float64] = np.zeros((0, 3))
+        self._table0: NDArray[np.float64] = np.zeros((0, 6))
         self._ids_cache: NDArray[np.uintp] = np.zeros(0, dtype=np.uintp)  # cache of _rows_of
         self._ids_sorted: NDArray[np.uintp] | None = None
         self._order: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._cog_sorted: NDArray[np.float64] = np.zeros((0, 2))
 
-    def before_step(self) -> None:
-        """Record every body's velocity at the start of a step."""
-        self._ids0, self._table0 = self._bodies_now(_BEFORE, 3)
+    def before_step(self, state: MachineState) -> None:
+        """Keep every body's velocity at the start of a step, from the machine's ``state``
+        (its read of the whole space) taken immediately before ``space.step``."""
+        self._ids0, self._table0 = state.space_ids, state.space
 
-    def after_step(self) -> float:
-        """Add the step's contact dissipation; returns the contacts' angular impulse about the
-        axis on the rotor-driven bodies in this step (internal units)."""
+    def after_step(self, state: MachineState) -> float:
+        """Add the step's contact dissipation (bodies as in ``state``, read after the step);
+        returns the contacts' angular impulse about the axis on the rotor-driven bodies in this
+        step (internal units)."""
         self._moment = 0.0
-        self._contacts()
+        self._contacts(state.space_ids, state.space)
         return self._moment
-
-    def _bodies_now(
-        self, fields: pb.BodyFields, width: int
-    ) -> tuple[NDArray[np.uintp], NDArray[np.float64]]:
-        """One batch read of every body: ids (copy) and an (n, width) float table (copy)."""
-        buffer = self._body_buffer
-        buffer.clear()
-        pb.get_space_bodies(self._space, fields, buffer)
-        ids = np.frombuffer(buffer.int_buf(), dtype=np.uintp).copy()
-        floats = np.frombuffer(buffer.float_buf(), dtype=np.float64)
-        if floats.size != ids.size * width:
-            raise RuntimeError(
-                f"pymunk.batch returned {floats.size} floats for {ids.size} bodies, expected "
-                f"{width} per body: the experimental batch layout has changed"
-            )
-        return ids, floats.reshape(ids.size, width).copy()
 
     def touching(self) -> tuple[NDArray[np.uintp], NDArray[np.float64]]:
         """Body ids (m, 2), handler order, and floats (m, 8) of the arbiters solved this step."""
@@ -155,43 +141,70 @@ class ArbiterMeter:
             raise LookupError("an arbiter's body is not among the space's bodies")
         return where
 
-    def _contacts(self) -> None:
+    def _contacts(self, ids: NDArray[np.uintp], after: NDArray[np.float64]) -> None:
         """Add this step's contact dissipation and contact moment on rotor-driven bodies."""
         pair_ids, f = self.touching()
         if pair_ids.shape[0] == 0:
             return
-        ids, after = self._bodies_now(_AFTER, 6)
         where = self._rows_of(ids, pair_ids.ravel())  # rows in the sorted order
         rows = self._order[where].reshape(-1, 2)
         if np.array_equal(self._ids0, ids):
-            before = self._table0[rows]
+            rows0 = rows
         else:  # the body arrays changed during the step (not expected): look the ids up again
             order0 = np.argsort(self._ids0, kind="stable")
-            before = self._table0[order0[np.searchsorted(self._ids0[order0], pair_ids)]]
+            rows0 = order0[np.searchsorted(self._ids0[order0], pair_ids)]
         cog_local = self._cog_sorted[where].reshape(-1, 2, 2)
-        state = after[rows]  # (m, 2, 6): x y angle vx vy w
-        cos, sin = np.cos(state[..., 2]), np.sin(state[..., 2])
-        centre_x = state[..., 0] + cos * cog_local[..., 0] - sin * cog_local[..., 1]
-        centre_y = state[..., 1] + sin * cog_local[..., 0] + cog_local[..., 1] * cos
-        impulse, normal, p1, p2 = f[:, 0:2], f[:, 2:4], f[:, 4:6], f[:, 6:8]
-        swapped = ((p2 - p1) * normal).sum(axis=1) > 0
-        points = np.stack(
-            [np.where(swapped[:, None], p2, p1), np.where(swapped[:, None], p1, p2)], axis=1
-        )  # (m, 2, 2): each body's own contact point
-        rx, ry = points[..., 0] - centre_x, points[..., 1] - centre_y
-
-        def relative(v: NDArray[np.float64]) -> NDArray[np.float64]:
-            # v: (m, 2, 3) vx vy w; velocity of a at its point minus b's at its point
-            ux = v[..., 0] - v[..., 2] * ry
-            uy = v[..., 1] + v[..., 2] * rx
-            return np.stack([ux[:, 0] - ux[:, 1], uy[:, 0] - uy[:, 1]], axis=1)
-
-        total = relative(before) + relative(state[..., 3:6])
-        self.dissipated -= 0.5 * math.fsum((impulse * total).ravel())
+        loss, moment = _arbiter_terms(
+            f, rows, rows0, after, self._table0, cog_local, pair_ids, self._machine_ids
+        )
+        self.dissipated -= 0.5 * math.fsum(loss.ravel())
         if self._machine_ids.size:
-            # angular impulse about the axis on a rotor-driven body: +p_a × J on a, −p_b × J on b
-            for side, sign in ((0, 1.0), (1, -1.0)):
-                machine = np.isin(pair_ids[:, side], self._machine_ids)
-                if machine.any():
-                    p, j = points[machine, side], impulse[machine]
-                    self._moment += sign * math.fsum(p[:, 0] * j[:, 1] - p[:, 1] * j[:, 0])
+            self._moment += math.fsum(moment[:, 0])
+            self._moment += -math.fsum(moment[:, 1])
+
+
+@numba.njit(cache=True)
+def _arbiter_terms(
+    f: NDArray[np.float64],
+    rows: NDArray[np.intp],
+    rows0: NDArray[np.intp],
+    after: NDArray[np.float64],
+    before: NDArray[np.float64],
+    cog: NDArray[np.float64],
+    pair_ids: NDArray[np.uintp],
+    machine_ids: NDArray[np.uintp],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per touching arbiter (floats ``f``: J, normal, the two contact points), the terms of its
+    dissipation, J_x·ū_x and J_y·ū_y with ū the sum of the relative velocities of the contact
+    points before and after the step (module doc), and of the angular impulse about the axis
+    on each of its bodies that is rotor-driven (its id, ``pair_ids``, among ``machine_ids``),
+    p × J (0 where not). ``rows`` / ``rows0``: the two bodies' rows in the space's tables
+    after and before the step (x y angle vx vy w); ``cog``: their centres of gravity in their
+    own frames."""
+    m = f.shape[0]
+    loss = np.empty((m, 2))
+    moment = np.zeros((m, 2))
+    for c in range(m):
+        jx, jy, nx, ny = f[c, 0], f[c, 1], f[c, 2], f[c, 3]
+        swapped = (f[c, 6] - f[c, 4]) * nx + (f[c, 7] - f[c, 5]) * ny > 0
+        u = np.empty((2, 4))  # per side: ux, uy before the step, ux, uy after it
+        for side in range(2):
+            own = 6 if swapped == (side == 0) else 4  # each body's own contact point
+            px, py = f[c, own], f[c, own + 1]
+            k = rows[c, side]
+            angle = after[k, 2]
+            cos, sin = math.cos(angle), math.sin(angle)
+            cx = after[k, 0] + cos * cog[c, side, 0] - sin * cog[c, side, 1]
+            cy = after[k, 1] + sin * cog[c, side, 0] + cog[c, side, 1] * cos
+            rx, ry = px - cx, py - cy
+            k0 = rows0[c, side]
+            u[side, 0] = before[k0, 3] - before[k0, 5] * ry
+            u[side, 1] = before[k0, 4] + before[k0, 5] * rx
+            u[side, 2] = after[k, 3] - after[k, 5] * ry
+            u[side, 3] = after[k, 4] + after[k, 5] * rx
+            for driven in machine_ids:
+                if pair_ids[c, side] == driven:
+                    moment[c, side] = px * jy - py * jx
+        loss[c, 0] = jx * ((u[0, 0] - u[1, 0]) + (u[0, 2] - u[1, 2]))
+        loss[c, 1] = jy * ((u[0, 1] - u[1, 1]) + (u[0, 3] - u[1, 3]))
+    return loss, moment

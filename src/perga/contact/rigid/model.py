@@ -47,7 +47,7 @@ class _Kinematics:
         return len(self._model.ids)
 
     def constants(self) -> tuple[FloatArray, FloatArray]:
-        return self._model.masses.copy(), self._model.radii.copy()
+        return self._model.masses, self._model.radii
 
     def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
         return self._model.writer().read_internal(positions=positions)
@@ -60,9 +60,9 @@ class RigidContacts:
     """The rigid contact model on ``machine`` (:class:`~perga.contact.protocol.ContactModel`).
 
     record_impacts: keep an :class:`~perga.model.records.Impact` per granule-hammer impact;
-    track_energy: measure the contacts' dissipation (two ``pymunk.batch`` body reads and one
-    arbiter read per step, no Python callback). Per granule row: ``ids`` (persistent numbers),
-    ``masses`` (kg), ``radii`` (m).
+    track_energy: measure the contacts' dissipation (from the simulation's two reads of the
+    space and one arbiter read per step, no Python callback). Per granule row: ``ids``
+    (persistent numbers), ``masses`` (kg), ``radii`` (m).
     """
 
     def __init__(
@@ -122,12 +122,12 @@ class RigidContacts:
         return self._writer
 
     def before_machine_step(self, time: float, machine: MachineState) -> None:
-        """Stamp the step's impacts with its end ``time`` (s); read the bodies' velocities for
-        the dissipation (the arbiter meter reads every body, so ``machine`` is not needed)."""
+        """Stamp the step's impacts with its end ``time`` (s); keep the bodies' velocities
+        (``machine``'s read of the space) for the dissipation."""
         if self.recorder is not None:
             self.recorder.time = time
         if self.arbiters is not None:
-            self.arbiters.before_step()
+            self.arbiters.before_step(machine)
 
     def after_machine_step(self, time: float, machine: MachineState) -> float:
         """Release the held granules whose bond is overloaded; the step's dissipation from the
@@ -135,7 +135,7 @@ class RigidContacts:
         internal units."""
         if self._bonds:
             self._hold_or_release(time)
-        return 0.0 if self.arbiters is None else self.arbiters.after_step()
+        return 0.0 if self.arbiters is None else self.arbiters.after_step(machine)
 
     def energy_terms(self) -> LedgerTerms:
         """The granules' kinetic energy, gravity's work on them, what fed and removed granules

@@ -1,0 +1,149 @@
+"""Wall seconds per simulated second of whole separator runs (issue 14), and the share of the
+step spent outside the soft kernel, optionally side by side with another commit.
+
+Each measurement is one `perga run` done in a fresh subprocess (``--one``) through
+``perga.runner.run_case``, with ``SoftGranules.step`` (the compiled kernel call) and
+``Simulation.step`` wrapped by timers: wall time of the run (``summary.json``, build and output
+included), time in ``Simulation.step``, time in the kernel. Variants (this tree, and with
+``--against REF`` the commit REF checked out in a temporary worktree) are interleaved run by
+run; figures are medians over ``--repeats``, ratios are medians of run-by-run paired ratios.
+Every variant first runs each case once untimed (numba's cache).
+
+    python benchmarks/separator_speed.py                       # the three cases, this tree
+    python benchmarks/separator_speed.py --against d605bbb     # side by side with a commit
+    python benchmarks/separator_speed.py --cases soft-separator --repeats 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = {
+    "soft-separator": (ROOT / "cases/soft-separator.toml", 0.5),
+    "separator": (ROOT / "cases/separator.toml", 0.5),
+    "soft-separator-1000": (ROOT / "benchmarks/cases/soft-separator-1000.toml", 0.01),
+}
+"""Name -> (case file, simulated seconds measured)."""
+
+
+def one(case: str, duration: float, out: str) -> None:
+    """Run ``case`` for ``duration`` s into ``out`` with the step and kernel timed; print JSON."""
+    from perga.case import load_case
+    from perga.contact.soft.granules import SoftGranules
+    from perga.engine.simulation import Simulation
+    from perga.runner import prepare_directory, run_case
+
+    timers = {"step": 0.0, "kernel": 0.0}
+
+    def timed(name: str, method):
+        def wrapper(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return method(*args, **kwargs)
+            finally:
+                timers[name] += time.perf_counter() - start
+
+        return wrapper
+
+    Simulation.step = timed("step", Simulation.step)  # type: ignore[method-assign]
+    SoftGranules.step = timed("kernel", SoftGranules.step)  # type: ignore[method-assign]
+    path = Path(case)
+    loaded = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
+    prepare_directory(Path(out), overwrite=True)
+    summary = run_case(loaded, path, Path(out))
+    print(
+        json.dumps(
+            {
+                "status": summary.status,
+                "wall": summary.wall_time,
+                "simulated": summary.simulated_time,
+                "step": timers["step"],
+                "kernel": timers["kernel"],
+                "threads": summary.threads,
+            }
+        )
+    )
+
+
+def measure(source: Path, case: Path, duration: float) -> dict[str, float]:
+    """One run in a subprocess with ``source`` (a src/ folder) first on the path."""
+    env = dict(os.environ, PYTHONPATH=str(source), NUMBA_NUM_THREADS="1")
+    with tempfile.TemporaryDirectory() as out:
+        done = subprocess.run(
+            [sys.executable, __file__, "--one", str(case), str(duration), out],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    if result["status"] != "completed":
+        raise RuntimeError(f"{case} with {source}: {result['status']}")
+    return result
+
+
+def worktree(ref: str) -> Path:
+    """A temporary checkout of ``ref``; returns its src/ folder."""
+    sha = subprocess.run(
+        ["git", "-C", str(ROOT), "rev-parse", "--short", ref],
+        capture_output=True, text=True, check=True,
+    ).stdout.strip()  # fmt: skip
+    path = Path(tempfile.gettempdir()) / f"perga-{sha}"
+    if not path.exists():
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), sha],
+            capture_output=True, check=True,
+        )  # fmt: skip
+    return path / "src"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=list(CASES))
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--against", help="a git ref to measure side by side")
+    parser.add_argument("--one", nargs=3, metavar=("CASE", "S", "OUT"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one:
+        one(args.one[0], float(args.one[1]), args.one[2])
+        return
+    variants = {"this tree": ROOT / "src"}
+    if args.against:
+        variants[args.against] = worktree(args.against)
+    print(f"load average at start: {os.getloadavg()[0]:.2f}; cores: {os.cpu_count()}")
+    for name in args.cases:
+        case, duration = CASES[name]
+        for source in variants.values():
+            measure(source, case, min(duration, 0.002))  # warm numba's cache
+        runs: dict[str, list[dict[str, float]]] = {v: [] for v in variants}
+        for _ in range(args.repeats):
+            for variant, source in variants.items():
+                runs[variant].append(measure(source, case, duration))
+        print(f"\n{name}: {duration} s simulated, {args.repeats} runs per variant, 1 thread")
+        header = ("variant", "wall s/s", "step s/s", "kernel s/s", "outside kernel")
+        print("{:>12} {:>9} {:>9} {:>10} {:>15}".format(*header))
+        for variant, results in runs.items():
+            wall = statistics.median(r["wall"] / r["simulated"] for r in results)
+            step = statistics.median(r["step"] / r["simulated"] for r in results)
+            kernel = statistics.median(r["kernel"] / r["simulated"] for r in results)
+            outside = statistics.median(1 - r["kernel"] / r["step"] for r in results)
+            share = f"{100 * outside:.0f} %" if kernel > 0 else "-"
+            print(f"{variant:>12} {wall:9.1f} {step:9.1f} {kernel:10.1f} {share:>15}")
+        if args.against:
+            ratios = [a["wall"] / b["wall"] for a, b in zip(*runs.values(), strict=True)]
+            print(f"wall ratio this tree / {args.against}: median {statistics.median(ratios):.3f} "
+                  f"(runs {min(ratios):.3f}-{max(ratios):.3f})")  # fmt: skip
+    print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
