@@ -19,7 +19,7 @@ ALLOWED: dict[str, set[str]] = {
     "engine": {"engine", "model", "analytic", "geometry", "contact", "contact.protocol"},
     "contact": {"contact", "engine", "model", "analytic", "geometry"},
     "output": {"output", "model", "geometry", "analytic"},
-    "stats": {"stats", "case", "analytic", "model"},
+    "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
                 "runner", "__init__"},
     "runner": {"runner", "case", "model", "engine", "output"},

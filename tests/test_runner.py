@@ -4,11 +4,14 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from perga.case import load_case
 from perga.cli import main
 from perga.runner import RunStoppedError, prepare_directory, run_case
+from perga.stats.metrics import evaluate
+from perga.stats.tables import load_run
 
 ROOT = Path(__file__).resolve().parents[1]
 SINGLE = ROOT / "cases" / "single-granule.toml"
@@ -148,3 +151,25 @@ def test_non_finite_state_stops_with_a_diagnostic(tmp_path):
     sim.contacts.bodies.granule_bodies[0].velocity = (float("nan"), 0.0)
     with pytest.raises(RunStoppedError, match=r"step 1 .* granule 0 has a non-finite .* reduce"):
         check_granules(sim.frame(), case.chamber.radius, case.chamber.wall_thickness, sim.dt)
+
+
+def test_parquet_granule_table_holds_the_csv_values_and_serves_the_readers(tmp_path):
+    """output.granule_table = "parquet": the same values as the CSV run, bit for bit, and
+    load_run, render and the metrics read it; any other format is refused (exit 2)."""
+    case_path = short_case(tmp_path)
+    runs = {}
+    for fmt in ("csv", "parquet"):
+        out = tmp_path / fmt
+        args = ["run", str(case_path), "-o", str(out), "--quiet"]
+        assert main([*args, "--set", f"output.granule_table={fmt}"]) == 0
+        runs[fmt] = out
+    assert not (runs["parquet"] / "granules.csv").exists()
+    a, b = load_run(runs["csv"]).granules, load_run(runs["parquet"]).granules
+    assert a.keys() == b.keys() and len(a["time"]) > 0
+    for name in a:
+        assert np.array_equal(a[name], b[name])
+    assert main(["render", str(runs["parquet"]), "--out", str(tmp_path / "p.png")]) == 0
+    radius = [evaluate(load_run(runs[f]), "radius_at:0.01") for f in ("csv", "parquet")]
+    assert radius[0] == radius[1] and radius[0] > 0
+    bad = ["run", str(case_path), "-o", str(tmp_path / "x"), "--quiet"]
+    assert main([*bad, "--set", "output.granule_table=json"]) == 2

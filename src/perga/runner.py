@@ -28,7 +28,7 @@ from perga.case.schema import Case
 from perga.engine.simulation import Simulation
 from perga.model.frame import Frame
 from perga.model.from_case import scene_spec
-from perga.output.recorders import RECORDERS, PhaseLock, Recorder
+from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
 
 
@@ -172,7 +172,7 @@ def run_case(
         assert spec.plan is not None and spec.chamber is not None
         summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
         write_scene(directory, spec)
-        recorders = [RECORDERS[name](directory, spec) for name in record]
+        recorders = make_recorders(record, directory, spec, case.output.granule_table)
         frames = PhaseLock(case.output.every)
         n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
         outer, thickness = spec.chamber.outer_radius, spec.chamber.wall_thickness

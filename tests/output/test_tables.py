@@ -8,7 +8,8 @@ import csv
 import numpy as np
 import pytest
 
-from perga.output.tables import Table
+from perga.output import tables
+from perga.output.tables import ParquetTable, Table, open_table, read_columns, table_path
 
 VALUES = np.array(
     [0.1, 1e-05, 1.0, 0.0, -0.0, -2.5e300, 5e-324, 1 / 3, 2.0**53 + 2, np.nan, np.inf, -np.inf]
@@ -52,3 +53,59 @@ def test_a_wrong_number_of_columns_is_refused(tmp_path, count) -> None:
     with pytest.raises(ValueError, match="header has 2"):
         table.write_columns([np.zeros(2)] * count)
     table.close()
+
+
+# --- the Parquet granule table ----------------------------------------------------------------
+
+
+def _frames(n_frames: int, n: int) -> list[list[np.ndarray]]:
+    rng = np.random.default_rng(3)
+    return [
+        [np.full(n, 0.01 * k), np.arange(n, dtype=np.int64), rng.normal(size=n)]
+        for k in range(n_frames)
+    ]
+
+
+def test_parquet_parts_are_written_when_full_and_read_back_exactly(tmp_path, monkeypatch) -> None:
+    """Parts of PART_ROWS rows appear while writing (each complete, no temporary file visible
+    to readers); at close the rest; the dataset reads back bit for bit, in order, like CSV."""
+    monkeypatch.setattr(tables, "PART_ROWS", 250)
+    frames = _frames(7, 100)
+    parquet = ParquetTable(tmp_path / "g.parquet", ["time", "id", "x"])
+    csv_table = Table(tmp_path / "g.csv", ["time", "id", "x"])
+    for k, frame in enumerate(frames):
+        parquet.write_columns(frame)
+        csv_table.write_columns(frame)
+        assert len(list((tmp_path / "g.parquet").glob("part-*.parquet"))) == (k + 1) // 3
+    csv_table.close()
+    parquet.close()
+    parquet.close()
+    assert sorted(p.name for p in (tmp_path / "g.parquet").iterdir()) == [
+        "part-00000.parquet", "part-00001.parquet", "part-00002.parquet"
+    ]  # fmt: skip
+    a, b = read_columns(tmp_path / "g.csv"), read_columns(tmp_path / "g.parquet")
+    assert list(a) == list(b) == ["time", "id", "x"]
+    for name in a:
+        assert np.array_equal(a[name], b[name])
+    assert np.array_equal(b["x"], np.concatenate([f[2] for f in frames]))
+
+
+def test_parquet_rows_like_columns(tmp_path) -> None:
+    table = ParquetTable(tmp_path / "e.parquet", ["time", "granule"])
+    table.write([(0.5, 3), (0.75, 4)])
+    table.write([])
+    table.close()
+    back = read_columns(tmp_path / "e.parquet")
+    assert list(back) == ["time", "granule"]
+    assert back["time"].tolist() == [0.5, 0.75] and back["granule"].tolist() == [3.0, 4.0]
+
+
+def test_open_table_knows_two_formats(tmp_path) -> None:
+    assert isinstance(open_table(tmp_path / "a.csv", ["x"]), Table)
+    parquet = open_table(tmp_path / "b.csv", ["x"], "parquet")
+    assert isinstance(parquet, ParquetTable) and parquet.path == tmp_path / "b.parquet"
+    with pytest.raises(ValueError, match="'csv' or 'parquet'"):
+        open_table(tmp_path / "c.csv", ["x"], "json")
+    assert table_path(tmp_path, "b") == tmp_path / "b.parquet"
+    assert table_path(tmp_path, "a") == tmp_path / "a.csv"
+    assert table_path(tmp_path, "none") is None

@@ -14,6 +14,7 @@ import numpy as np
 
 from perga.output.figures import new_figure, save
 from perga.output.render import run_table
+from perga.output.tables import table_path
 
 FLOW_BINS = 30
 """Intervals of the run the mass flow is averaged over (fewer if the run has fewer frames)."""
@@ -28,7 +29,7 @@ def mass_flow(times: np.ndarray, masses: np.ndarray, edges: np.ndarray) -> np.nd
 
 
 def _optional(path: Path) -> np.ndarray | None:
-    return run_table(path) if path.exists() else None
+    return run_table(path) if table_path(path.parent, path.stem) is not None else None
 
 
 def process_figure(run: Path, out: Path) -> None:

@@ -21,7 +21,7 @@ import numpy as np
 from perga.model.frame import Frame
 from perga.model.records import Departure, Events, Impact, Release
 from perga.model.spec import SceneSpec
-from perga.output.tables import Table
+from perga.output.tables import ParquetTable, Table, open_table
 from perga.output.vtk import VtkRecorder
 
 
@@ -69,15 +69,18 @@ class GranuleRecorder(TableRecorder):
     """granules.csv: time, id, x, y, vx, vy, angular_velocity, speed, radius, mass (SI); with
     held granules in the system also ``held`` (1 while in its cell), with damage ``survival``
     (expected, -), ``broken`` (1 if drawn broken) and ``damaging_impacts`` (its impacts above
-    W_min: the k of the master curve)."""
+    W_min: the k of the master curve). ``table_format`` 'parquet' writes the same columns as
+    the Parquet dataset granules.parquet (:class:`~perga.output.tables.ParquetTable`)."""
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+    table: Table | ParquetTable
+
+    def __init__(self, directory: Path, spec: SceneSpec, table_format: str = "csv") -> None:
         self.held = spec.has_bonds
         self.damage = spec.process.damage is not None
         columns = ["time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed", "radius"]
         columns += ["mass"] + ["held"] * self.held
         columns += ["survival", "broken", "damaging_impacts"] * self.damage
-        self.table = Table(directory / "granules.csv", columns)
+        self.table = open_table(directory / "granules.csv", columns, table_format)
 
     def record(self, frame: Frame, events: Events) -> None:
         """Append one frame."""
@@ -243,3 +246,16 @@ RECORDERS: dict[str, type] = {
     "vtk": VtkRecorder,
 }
 """Recorder class by the name used in the case file's output.record."""
+
+
+def make_recorders(
+    names: Sequence[str], directory: Path, spec: SceneSpec, granule_table: str = "csv"
+) -> list[Recorder]:
+    """The recorders ``names`` (keys of :data:`RECORDERS`) for a run into ``directory``; the
+    granule table in ``granule_table`` format ('csv' or 'parquet')."""
+    return [
+        GranuleRecorder(directory, spec, granule_table)
+        if name == "granules"
+        else RECORDERS[name](directory, spec)
+        for name in names
+    ]

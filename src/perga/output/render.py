@@ -22,17 +22,21 @@ from matplotlib.patches import Circle, Polygon
 
 from perga.geometry.polygon import outline_or_circle
 from perga.output.scene_file import HammerGeometry, read_scene
+from perga.output.tables import read_columns, table_path
 
 
 def run_table(path: Path) -> np.ndarray:
-    """A run table as a structured array (names from the header; no rows: empty)."""
-    if not path.exists():
+    """A run table (``NAME.csv``, or its Parquet form ``NAME.parquet``) as a structured array
+    of floats (names from the header; no rows: empty)."""
+    found = table_path(path.parent, path.stem)
+    if found is None:
         raise FileNotFoundError(f"{path}: missing (record it with output.record)")
-    with path.open(encoding="utf-8") as stream:
-        names = stream.readline().strip().split(",")
-        if not stream.read().strip():
-            return np.zeros(0, dtype=[(n, float) for n in names])
-    return np.atleast_1d(np.genfromtxt(path, delimiter=",", names=True))
+    columns = read_columns(found)
+    n = len(next(iter(columns.values()), []))
+    out = np.zeros(n, dtype=[(name, float) for name in columns])
+    for name, values in columns.items():
+        out[name] = values
+    return out
 
 
 def _hammer_outline(h: HammerGeometry, rotor_angle: float, alpha: float) -> np.ndarray:

@@ -1,5 +1,6 @@
-"""CSV tables that stay readable when a run stops midway: the header is written first and every
-block of rows is flushed to disk as soon as it is written.
+"""Run tables: CSV tables that stay readable when a run stops midway (the header is written
+first and every block of rows is flushed to disk as soon as it is written), and, for large runs,
+the granule table as Parquet (:class:`ParquetTable`); :func:`read_columns` reads either.
 
 Rows of Python values go through the ``csv`` module (floats as ``repr``); a block given as
 columns of arrays (``write_columns``: a frame of granules) goes through pyarrow's CSV writer,
@@ -18,6 +19,7 @@ from types import TracebackType
 import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
 
 _NO_HEADER = pacsv.WriteOptions(include_header=False)
 
@@ -75,3 +77,109 @@ class Table:
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+
+PART_ROWS = 1 << 20
+"""Rows of a Parquet part: a part is written once it holds this many (and at close)."""
+
+
+class ParquetTable:
+    """A table as a Parquet dataset, the directory ``path`` (``NAME.parquet/``) of parts
+    ``part-NNNNN.parquet`` that pyarrow, DuckDB, Polars and pandas read as one table. Blocks are
+    kept in memory until they make :data:`PART_ROWS` rows, then written as one part, atomically
+    (a temporary file renamed), and the rest at :meth:`close`: parts on disk are always
+    complete, and what a killed process had not written yet is lost (at most one part). Chosen
+    over one Parquet file (unreadable until its footer is written at the end) and over CSV for
+    size and speed (docs/performance.md)."""
+
+    def __init__(self, path: Path, columns: Sequence[str]) -> None:
+        self.path = path
+        self.columns = tuple(columns)
+        path.mkdir(parents=True, exist_ok=True)
+        self.rows = 0
+        self._blocks: list[pa.Table] = []
+        self._pending = 0
+        self._parts = 0
+        self._closed = False
+
+    def write(self, rows: Iterable[Sequence[object]]) -> None:
+        """Append rows (each as long as the header)."""
+        rows = list(rows)
+        if rows:
+            self.write_columns([np.asarray(column) for column in zip(*rows, strict=True)])
+
+    def write_columns(self, columns: Sequence[np.ndarray]) -> None:
+        """Append a block given as one array per column (all of one length)."""
+        if len(columns) != len(self.columns):
+            raise ValueError(
+                f"{self.path.name}: {len(columns)} columns given, header has {len(self.columns)}"
+            )
+        block = pa.table([pa.array(np.asarray(c)) for c in columns], names=list(self.columns))
+        self._blocks.append(block)
+        self._pending += block.num_rows
+        self.rows += block.num_rows
+        if self._pending >= PART_ROWS:
+            self._write_part()
+
+    def _write_part(self) -> None:
+        if not self._blocks:
+            return
+        part = self.path / f"part-{self._parts:05d}.parquet"
+        temporary = self.path / f".{part.name}.tmp"  # readers skip names starting with "."
+        pq.write_table(pa.concat_tables(self._blocks), temporary)
+        temporary.replace(part)
+        self._parts += 1
+        self._blocks, self._pending = [], 0
+
+    def close(self) -> None:
+        """Write what is held in memory (idempotent)."""
+        if not self._closed:
+            self._closed = True
+            self._write_part()
+
+    def __enter__(self) -> ParquetTable:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def open_table(
+    path: Path, columns: Sequence[str], table_format: str = "csv"
+) -> Table | ParquetTable:
+    """The table ``path`` (``NAME.csv``) in ``table_format``: 'csv' (:class:`Table`) or
+    'parquet' (:class:`ParquetTable` at ``NAME.parquet``)."""
+    if table_format == "parquet":
+        return ParquetTable(path.with_suffix(".parquet"), columns)
+    if table_format != "csv":
+        raise ValueError(f"table format must be 'csv' or 'parquet' (got {table_format!r})")
+    return Table(path, columns)
+
+
+def table_path(directory: Path, name: str) -> Path | None:
+    """Run table ``name`` ('granules', 'impacts', ...) in ``directory``: ``NAME.parquet`` or
+    ``NAME.csv``, None when the run has neither."""
+    for path in (directory / f"{name}.parquet", directory / f"{name}.csv"):
+        if path.exists():
+            return path
+    return None
+
+
+def read_columns(path: Path) -> dict[str, np.ndarray]:
+    """A run table (a CSV file with a header row, or a Parquet dataset) as {column: float64
+    array}; empty columns when it has no rows."""
+    if path.suffix == ".parquet":
+        table = pq.read_table(path)
+        return {name: table.column(name).to_numpy().astype(float) for name in table.column_names}
+    with path.open(encoding="utf-8") as stream:
+        header = stream.readline().strip().split(",")
+        body = stream.read()
+    if not body.strip():
+        return {name: np.empty(0) for name in header}
+    data = np.loadtxt(body.splitlines(), delimiter=",", ndmin=2)
+    return {name: data[:, i] for i, name in enumerate(header)}

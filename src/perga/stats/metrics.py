@@ -59,7 +59,8 @@ def _impact_rows(run: Run, granule: int = 0) -> np.ndarray:
 
 
 def _tables(run: Run) -> set[str]:
-    return {p.name for p in run.directory.iterdir() if p.suffix == ".csv"}
+    """The run's tables, as CSV names (a Parquet granule table counts as granules.csv)."""
+    return {p.stem + ".csv" for p in run.directory.iterdir() if p.suffix in (".csv", ".parquet")}
 
 
 def _nth_impact(run: Run, n: int) -> int:

@@ -12,20 +12,16 @@ from numpy.typing import NDArray
 
 from perga.case import load_case
 from perga.case.schema import Case
+from perga.output.tables import read_columns, table_path
 
 FloatArray = NDArray[np.float64]
 Columns = dict[str, FloatArray]
 
 
 def read_table(path: Path) -> Columns:
-    """A CSV table with a header row as {column: float array}; empty columns if no rows."""
-    with path.open(encoding="utf-8") as stream:
-        header = stream.readline().strip().split(",")
-        body = stream.read()
-    if not body.strip():
-        return {name: np.empty(0) for name in header}
-    data = np.loadtxt(body.splitlines(), delimiter=",", ndmin=2)
-    return {name: data[:, i] for i, name in enumerate(header)}
+    """A run table (CSV with a header row, or a Parquet dataset) as {column: float array};
+    empty columns if no rows (:func:`perga.output.tables.read_columns`)."""
+    return read_columns(path)
 
 
 @dataclass(frozen=True)
@@ -65,8 +61,9 @@ class Run:
         return np.interp(t, self.hammers["time"][rows], self.hammers["swing_angle"][rows])
 
 
-def _optional(path: Path) -> Columns:
-    return read_table(path) if path.exists() else {}
+def _optional(directory: Path, name: str) -> Columns:
+    path = table_path(directory, name)
+    return {} if path is None else read_columns(path)
 
 
 def load_run(directory: Path | str) -> Run:
@@ -81,10 +78,10 @@ def load_run(directory: Path | str) -> Run:
         directory=directory,
         case=load_case(directory / "case.toml", origin if origin and origin.is_dir() else None),
         summary=summary,
-        granules=_optional(directory / "granules.csv"),
-        hammers=_optional(directory / "hammers.csv"),
-        impacts=_optional(directory / "impacts.csv"),
-        energy=_optional(directory / "energy.csv"),
+        granules=_optional(directory, "granules"),
+        hammers=_optional(directory, "hammers"),
+        impacts=_optional(directory, "impacts"),
+        energy=_optional(directory, "energy"),
     )
 
 
