@@ -32,7 +32,7 @@ from perga.contact.soft.build import granule_table_materials, soft_granules
 from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.machine import MachinePolygons
-from perga.contact.soft.threads import free_cores, kernel_threads
+from perga.contact.soft.threads import free_cores, kernel_threads, numba_threads
 from perga.engine import units as u
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
@@ -103,7 +103,8 @@ class SoftContacts:
         self._x0 = g.x.copy()
         self._granule_energy0 = self._granule_energies()
         self._kinetic0 = float(self._granule_energy0.sum())
-        self._elastic0 = g.contact_energy()
+        with numba_threads(self.threads):
+            self._elastic0 = g.contact_energy()
         self._gone = LedgerTerms()
         self._inflow = 0.0
         self._moment = 0.0
@@ -152,13 +153,15 @@ class SoftContacts:
         removed granules brought and took."""
         g = self.granules
         energies = self._granule_energies()
+        with numba_threads(self.threads):
+            elastic = g.contact_energy()
         present = LedgerTerms(
             kinetic=float(energies.sum()),
             kinetic_initial=self._kinetic0,
             moved=0.5 * float(np.abs(energies - self._granule_energy0).sum()),
             gravity_work=float(np.sum(g.m * ((g.x - self._x0) @ np.asarray(g.gravity)))),
             contact_dissipation=float(np.sum(g.dissipated)),
-            elastic=g.contact_energy(),
+            elastic=elastic,
             elastic_initial=self._elastic0,
             inflow=self._inflow,
         )
@@ -224,7 +227,8 @@ class SoftContacts:
             gravity_work=float(np.sum(g.m[rows] * fall)),
             outflow=float(energies[rows].sum()),
         )
-        elastic = g.remove(rows)
+        with numba_threads(self.threads):
+            elastic = g.remove(rows)
         self._gone = self._gone + gone + LedgerTerms(outflow=elastic)
         for name in ("ids", "_reported", "_x0", "_granule_energy0"):
             setattr(self, name, getattr(self, name)[keep])
@@ -233,4 +237,5 @@ class SoftContacts:
 
     def contact_counts(self) -> tuple[np.ndarray, FloatArray]:
         """Per granule, its contacts now and the largest of their overlaps, m."""
-        return self.granules.contact_counts()
+        with numba_threads(self.threads):
+            return self.granules.contact_counts()
