@@ -1,0 +1,109 @@
+"""Issue 14, item 5, measured before anything is built: in a soft separator, how many granules
+could take one machine step instead of k granule steps because nothing can reach them within it.
+
+At every ``--every``-th machine step of a run (one thread) the granules are classified: a granule
+is *free* over the coming machine step T = k·dt when its gap to every other granule, to every
+hammer polygon's bounding circle and to the round chamber wall exceeds the distance the two can
+close in T, with a bound on speeds that covers a contact within T: each granule's own speed plus
+v_bound = 2·(the fastest granule + the fastest polygon point) (a granule struck by a hammer leaves
+it at no more than twice the hammer's speed plus its own), and held granules are never free.
+The kernel's cost per machine step would then be about (active·k + free)/(n·k) of the uniform
+step's (pairs and polygons included), which is the bound on the speed-up printed: the work of
+one granule step is taken as the same for every granule, which overstates what a granule in free
+flight costs today (it has no contacts) and so understates the gain.
+
+    python benchmarks/multirate_potential.py                       # both soft separators
+    python benchmarks/multirate_potential.py --cases soft-separator --every 50
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from perga.case import load_case
+from perga.engine.simulation import Simulation
+from perga.model.from_case import scene_spec
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = {
+    "soft-separator": (ROOT / "cases/soft-separator.toml", 0.5),
+    "soft-separator-1000": (ROOT / "benchmarks/cases/soft-separator-1000.toml", 0.05),
+}
+
+
+def free_share(sim: Simulation, factor: int = 1) -> float:
+    """The share of granules free over the coming ``factor`` machine steps (module doc)."""
+    g = sim.contacts.granules
+    p = sim.contacts.polygons.polygons
+    x, v, r = g.x, g.v, g.r
+    n = len(r)
+    if n == 0:
+        return 1.0
+    span = sim.dt * factor
+    speed = np.hypot(v[:, 0], v[:, 1])
+    centres = p.com
+    rho = np.array(
+        [np.max(np.hypot(*(p.vertices[a:b] - p.com[k]).T)) for k, (a, b) in
+         enumerate(zip(p.start[:-1], p.start[1:], strict=True))]
+    )  # fmt: skip
+    poly_speed = np.hypot(p.velocity[:, 0], p.velocity[:, 1]) + np.abs(p.omega) * rho
+    v_bound = 2.0 * (speed.max() + (poly_speed.max() if len(rho) else 0.0))
+    reach = (speed + v_bound) * span + np.hypot(*g.gravity) * span**2
+    free = g.held == 0
+    tree = cKDTree(x)
+    for i, j in tree.query_pairs(2.0 * r.max() + reach.max(), output_type="ndarray"):
+        gap = np.hypot(*(x[i] - x[j])) - r[i] - r[j]
+        if gap <= reach[i] + reach[j]:
+            free[i] = free[j] = False
+    for k in range(len(rho)):
+        gap = np.hypot(*(x - centres[k]).T) - rho[k] - r
+        free &= gap > reach + poly_speed[k] * span
+    chamber = sim.spec.chamber
+    if chamber is not None:
+        free &= chamber.radius - np.hypot(x[:, 0], x[:, 1]) - r > reach
+    return float(free.mean())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=list(CASES))
+    parser.add_argument("--every", type=int, default=100, help="classify every n-th step")
+    parser.add_argument(
+        "--factors", type=int, nargs="+", default=[1, 10],
+        help="free over this many machine steps (a longer free step)",
+    )  # fmt: skip
+    args = parser.parse_args()
+    print(f"load average at start: {os.getloadavg()[0]:.2f}")
+    for name in args.cases:
+        path, duration = CASES[name]
+        case = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
+        sim = Simulation(scene_spec(case), record_impacts=False, track_energy=False)
+        k = sim.contacts.substeps
+        shares: dict[int, list[float]] = {f: [] for f in args.factors}
+        steps = round(duration / sim.dt)
+        for step in range(steps):
+            if step % args.every == 0:
+                for f in args.factors:
+                    shares[f].append(free_share(sim, f))
+            sim.step()
+        samples = len(shares[args.factors[0]])
+        print(f"{name}: {len(sim.contacts.granules.r)} granules, k = {k} granule steps per "
+              f"machine step, {samples} samples over {duration} s")  # fmt: skip
+        for f, values in shares.items():
+            s_ = np.array(values)
+            cost = (1.0 - s_) + s_ / (k * f)
+            print(
+                f"  free over {f} machine step(s) ({k * f} granule steps): share mean "
+                f"{s_.mean():.3f} (min {s_.min():.3f}, max {s_.max():.3f}); kernel cost "
+                f"bound {cost.mean():.3f} of the uniform step, speed-up <= {1 / cost.mean():.2f}"
+            )
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
