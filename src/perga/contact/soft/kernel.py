@@ -180,14 +180,26 @@ class Settings(NamedTuple):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
+def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach):
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
-    k; updates hist[k]."""
+    k; updates hist[k].
+
+    reach, m: dt times the largest extrapolated speed |v + ½ dt a_prev| of any granule, a bound
+    of the gap a pair can close in half a step (½ dt |δ̇|). A pair farther apart than r_i + r_j +
+    reach is not ``touching``: it is rejected on its squared distance, before its velocities are
+    read."""
     h = 0.5 * dt
     dx = x[i, 0] - x[j, 0]
     dy = x[i, 1] - x[j, 1]
     d2 = dx * dx + dy * dy
     rs = r[i] + r[j]
+    far = rs + reach
+    if d2 > far * far:
+        xi = hist[k]
+        if xi == 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0
+        hist[k] = 0.0
+        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - math.sqrt(d2), xi)
     if d2 > 0.0:
         d = math.sqrt(d2)
         nx = dx / d
@@ -237,11 +249,14 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost):
+def pair_forces(
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, lost
+):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
     one slice per chunk of i; the energy the chunk's contacts dissipated into lost[c], J.
     Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is the
-    kernel's hottest, and it ran slower taking the bundles (docs/performance.md)."""
+    kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach, m: as
+    in ``pair_force``."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -257,7 +272,7 @@ def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, d
             for k in range(start[i], start[i + 1]):
                 j = nbr[k]
                 fx, fy, ti, tj, de = pair_force(
-                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt
+                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach
                 )
                 a[i, 0] += fx
                 a[i, 1] += fy
@@ -353,8 +368,9 @@ def _integrate(
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
     Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
-    displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J)) of chunk
-    c (per-chunk values instead of shared reduction variables). Polygon contacts: the candidate
+    displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J), max
+    extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²)) of chunk c (per-chunk
+    values instead of shared reduction variables). Polygon contacts: the candidate
     pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
     entry e's load on its polygon and dissipation go to cand.loads[e]
@@ -373,11 +389,13 @@ def _integrate(
     n = x.shape[0]
     n_chunks = acc.shape[0]
     damp = 1.0 / (1.0 + drag * dt)
+    h = 0.5 * dt
     for c in prange(n_chunks):
         lo = c * n // n_chunks
         hi = (c + 1) * n // n_chunks
         dmax = 0.0
         smax = 0.0
+        umax = 0.0
         lost = 0.0
         for i in range(lo, hi):
             fx, fy, t, de = wall_force(
@@ -420,22 +438,32 @@ def _integrate(
             ey = x[i, 1] - x_ref[i, 1]
             dmax = max(dmax, ex * ex + ey * ey)
             smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+            ux = v[i, 0] + h * a_prev[i, 0]
+            uy = v[i, 1] + h * a_prev[i, 1]
+            umax = max(umax, ux * ux + uy * uy)
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
         chunk[c, 2] = lost
+        chunk[c, 3] = umax
 
 
 @njit(cache=True)
-def _stale(x, v, x_ref, skin, dt):
-    """Whether the list built at x_ref must be rebuilt: 2·max|x − x_ref| + dt·max|v| > skin."""
+def _motion(x, v, a_prev, x_ref, dt):
+    """(max |x − x_ref|², m²; max |v|², m²/s²; max |v + ½ dt a_prev|², m²/s²) over the granules:
+    the list's staleness and the pairs' reach (``pair_force``) at a call's start."""
+    h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
+    umax = 0.0
     for i in range(x.shape[0]):
         ex = x[i, 0] - x_ref[i, 0]
         ey = x[i, 1] - x_ref[i, 1]
         dmax = max(dmax, ex * ex + ey * ey)
         smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-    return 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
+        ux = v[i, 0] + h * a_prev[i, 0]
+        uy = v[i, 1] + h * a_prev[i, 1]
+        umax = max(umax, ux * ux + uy * uy)
+    return dmax, smax, umax
 
 
 @njit(cache=True)
@@ -490,11 +518,13 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
-    chunk = np.zeros((n_chunks, 3))
+    chunk = np.zeros((n_chunks, 4))
     lost = np.zeros(n_chunks)
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
     n_rebuilds = 0
-    need = settings.rebuild or (pairs and start.shape[0] != n + 1) or _stale(x, v, x_ref, skin, dt)
+    dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
+    need = settings.rebuild or (pairs and start.shape[0] != n + 1)
+    need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
     for step in range(n_steps):
         if need:
@@ -514,7 +544,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
         if pairs:
             pair_forces(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, work.acc, lost,
+                start, nbr, hist, dt, dt * math.sqrt(umax), work.acc, lost,
             )  # fmt: skip
         _integrate(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
@@ -524,9 +554,11 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
         dmax = 0.0
         smax = 0.0
+        umax = 0.0
         for c in range(n_chunks):
             dmax = max(dmax, chunk[c, 0])
             smax = max(smax, chunk[c, 1])
+            umax = max(umax, chunk[c, 3])
             dissipated[DISSIPATED_PAIRS] += lost[c]
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
