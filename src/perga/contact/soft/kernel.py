@@ -73,7 +73,20 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from perga.contact.soft.laws import contact_law, released, rolling_torque, touching
+from perga.contact.soft.laws import (
+    P_CLAMP,
+    P_DAMP,
+    P_DAMPT,
+    P_HERTZ,
+    P_KN,
+    P_MU,
+    P_MUR,
+    contact_law,
+    normal_force,
+    released,
+    rolling_torque,
+    touching,
+)
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import (
     Candidates,
@@ -180,14 +193,18 @@ class Settings(NamedTuple):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach):
+def pair_force(
+    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
+):  # fmt: skip
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
     k; updates hist[k].
 
     reach, m: dt times the largest extrapolated speed |v + ½ dt a_prev| of any granule, a bound
     of the gap a pair can close in half a step (½ dt |δ̇|). A pair farther apart than r_i + r_j +
     reach is not ``touching``: it is rejected on its squared distance, before its velocities are
-    read."""
+    read. tangential: whether any pair of the table has friction or tangential damping; if not,
+    the tangential law is skipped (its force is zero and its spring stays empty). Rolling
+    resistance is computed only for a pair with μ_r > 0."""
     h = 0.5 * dt
     dx = x[i, 0] - x[j, 0]
     dy = x[i, 1] - x[j, 1]
@@ -210,53 +227,67 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, r
         ny = 0.0
     vrx = v[i, 0] - v[j, 0] + h * (a_prev[i, 0] - a_prev[j, 0])
     vry = v[i, 1] - v[j, 1] + h * (a_prev[i, 1] - a_prev[j, 1])
-    wi = w[i] + h * a_prev[i, 2]
-    wj = w[j] + h * a_prev[j, 2]
     ddelta = -(vrx * nx + vry * ny)
-    if not touching(rs - d, ddelta, dt):
+    delta = rs - d
+    a = mat[i]
+    b = mat[j]
+    if not touching(delta, ddelta, dt):
         xi = hist[k]
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - d, xi)
-    tx = -ny
-    ty = nx
-    # Lever arms to the middle of the overlap, or of the gap just before first touch: they sum
-    # to d, so both discs load one common point and angular momentum is conserved.
-    half = 0.5 * (rs - d)
-    arm_i = r[i] - half
-    arm_j = r[j] - half
-    vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, delta, xi)
     m_eff = m[i] * m[j] / (m[i] + m[j])
-    a = mat[i]
-    b = mat[j]
-    fn, ft, hist[k], lost = contact_law(params, a, b, rs - d, ddelta, vt, m_eff, hist[k], dt)
-    mr = rolling_torque(
-        params,
-        a,
-        b,
-        fn,
-        wi - wj,
-        r[i] * r[j] / rs,
-        inertia[i] * inertia[j] / (inertia[i] + inertia[j]),
-        dt,
-    )
-    if mr != 0.0:
-        lost += abs(mr * (wi - wj)) * dt
-    ti = -arm_i * ft
-    tj = -arm_j * ft
-    return fn * nx + ft * tx, fn * ny + ft * ty, ti + mr, tj - mr, lost
+    wi = w[i] + h * a_prev[i, 2]
+    wj = w[j] + h * a_prev[j, 2]
+    if tangential:
+        tx = -ny
+        ty = nx
+        # Lever arms to the middle of the overlap, or of the gap just before first touch: they
+        # sum to d, so both discs load one common point and angular momentum is conserved.
+        half = 0.5 * delta
+        arm_i = r[i] - half
+        arm_j = r[j] - half
+        vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
+        fn, ft, hist[k], lost = contact_law(params, a, b, delta, ddelta, vt, m_eff, hist[k], dt)
+        fx = fn * nx + ft * tx
+        fy = fn * ny + ft * ty
+        ti = -arm_i * ft
+        tj = -arm_j * ft
+    else:
+        fn, lost = normal_force(
+            params[a, b, P_KN], params[a, b, P_DAMP], params[a, b, P_HERTZ],
+            params[a, b, P_CLAMP], delta, ddelta, m_eff, dt,
+        )  # fmt: skip
+        xi = hist[k]
+        if xi != 0.0:
+            hist[k] = 0.0
+            lost += released(params, a, b, delta, xi)
+        fx = fn * nx
+        fy = fn * ny
+        ti = 0.0
+        tj = 0.0
+    if params[a, b, P_MUR] != 0.0:  # rolling resistance
+        r_eff = r[i] * r[j] / rs
+        i_red = inertia[i] * inertia[j] / (inertia[i] + inertia[j])
+        mr = rolling_torque(params, a, b, fn, wi - wj, r_eff, i_red, dt)
+        if mr != 0.0:
+            lost += abs(mr * (wi - wj)) * dt
+            ti += mr
+            tj -= mr
+    return fx, fy, ti, tj, lost
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(
-    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, lost
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
+    lost,
 ):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
     one slice per chunk of i; the energy the chunk's contacts dissipated into lost[c], J.
     Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is the
-    kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach, m: as
-    in ``pair_force``."""
+    kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach (m) and
+    tangential: as in ``pair_force``."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -272,8 +303,9 @@ def pair_forces(
             for k in range(start[i], start[i + 1]):
                 j = nbr[k]
                 fx, fy, ti, tj, de = pair_force(
-                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach
-                )
+                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach,
+                    tangential,
+                )  # fmt: skip
                 a[i, 0] += fx
                 a[i, 1] += fy
                 a[i, 2] += ti
@@ -285,10 +317,11 @@ def pair_forces(
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt):
+def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach):
     """Sum of the wall forces and torque on granule i and the energy they dissipated:
     (fx, fy, tq, J); updates wall_hist[i]. Arrays as in ``Granules``, ``GranuleProps`` and
-    ``Walls``."""
+    ``Walls``; reach, m: as in ``pair_force`` (a granule deeper inside a chamber than reach is
+    rejected on its squared distance)."""
     h = 0.5 * dt
     ux = v[i, 0] + h * a_prev[i, 0]
     uy = v[i, 1] + h * a_prev[i, 1]
@@ -297,11 +330,21 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
     fy = 0.0
     tq = 0.0
     lost = 0.0
+    a = mat[i]
     for s in range(rows.shape[0]):
+        b = int(rows[s, 5])
         if rows[s, 0] == WALL_CHAMBER:
             dx = x[i, 0] - rows[s, 1]
             dy = x[i, 1] - rows[s, 2]
-            d = math.sqrt(dx * dx + dy * dy)
+            d2 = dx * dx + dy * dy
+            inside = rows[s, 3] - r[i] - reach
+            if inside > 0.0 and d2 < inside * inside:
+                xi = wall_hist[i, s]
+                if xi != 0.0:
+                    lost += released(params, a, b, r[i] + math.sqrt(d2) - rows[s, 3], xi)
+                    wall_hist[i, s] = 0.0
+                continue
+            d = math.sqrt(d2)
             delta = r[i] + d - rows[s, 3]
             if d > 0.0:
                 nx = -dx / d
@@ -317,21 +360,24 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
         if not touching(delta, ddelta, dt):
             xi = wall_hist[i, s]
             if xi != 0.0:
-                lost += released(params, mat[i], int(rows[s, 5]), delta, xi)
+                lost += released(params, a, b, delta, xi)
                 wall_hist[i, s] = 0.0
             continue
-        b = int(rows[s, 5])
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
         fn, ft, wall_hist[i, s], de = contact_law(
-            params, mat[i], b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
+            params, a, b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
         )
-        mr = rolling_torque(params, mat[i], b, fn, wi, r[i], inertia[i], dt)
         fx += fn * nx + ft * tx
         fy += fn * ny + ft * ty
-        tq += -r[i] * ft + mr
-        lost += de + abs(mr * wi) * dt if mr != 0.0 else de
+        if params[a, b, P_MUR] != 0.0:
+            mr = rolling_torque(params, a, b, fn, wi, r[i], inertia[i], dt)
+            tq += -r[i] * ft + mr
+            lost += de + abs(mr * wi) * dt if mr != 0.0 else de
+        else:
+            tq += -r[i] * ft
+            lost += de
     return fx, fy, tq, lost
 
 
@@ -363,7 +409,7 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step,
+    chunk, step, reach,
 ):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
@@ -375,9 +421,10 @@ def _integrate(
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
     entry e's load on its polygon and dissipation go to cand.loads[e]
     (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each granule (module
-    doc); ``step`` is the step's number. The polygon bundles come as arguments, not as a
-    ``Polygons``: a parallel loop takes a named tuple only from an argument or a constructor
-    call (numba 0.68); the other bundles are unpacked before the loop (module doc).
+    doc); ``step`` is the step's number; reach, m: as in ``pair_force``. The polygon bundles
+    come as arguments, not as a ``Polygons``: a parallel loop takes a named tuple only from an
+    argument or a constructor call (numba 0.68); the other bundles are unpacked before the loop
+    (module doc).
     """
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
@@ -399,7 +446,7 @@ def _integrate(
         lost = 0.0
         for i in range(lo, hi):
             fx, fy, t, de = wall_force(
-                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt
+                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
             )
             lost += de
             for q in range(n_chunks):
@@ -523,10 +570,12 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
     n_rebuilds = 0
     dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
+    tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
     need = settings.rebuild or (pairs and start.shape[0] != n + 1)
     need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
     for step in range(n_steps):
+        reach = dt * math.sqrt(umax)
         if need:
             if pairs:
                 start, nbr, hist = build(x, r, skin, start, nbr, hist)
@@ -544,11 +593,11 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
         if pairs:
             pair_forces(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, dt * math.sqrt(umax), work.acc, lost,
+                start, nbr, hist, dt, reach, tangential, work.acc, lost,
             )  # fmt: skip
         _integrate(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-            settings, work, x_ref, chunk, settings.first_step + step,
+            settings, work, x_ref, chunk, settings.first_step + step, reach,
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
