@@ -62,16 +62,21 @@ bundles, only read there, are passed whole.
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
 accumulating into its own slice of ``acc``, summed per granule afterwards, so each pair is
 computed once and no two threads write the same memory (no races, results identical for a given
-n_chunks). Everything else is per granule; polygon loads and their dissipation are summed per
+n_chunks). With one chunk the pair and per-granule passes run in functions without a parallel
+region (``_pair_forces_serial``, ``_integrate_serial``): opening one costs microseconds per step
+even on one thread, which a small system pays many times over (docs/performance.md).
+Everything else is per granule; polygon loads and their dissipation are summed per
 candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
 depend on the number of threads.
 """
 
 import math
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
+from numba.core.errors import NumbaPerformanceWarning
 
 from perga.contact.soft.laws import (
     P_CLAMP,
@@ -98,6 +103,18 @@ from perga.contact.soft.polygon_forces import (
 )
 from perga.contact.soft.polygon_set import PolygonArrays, PolygonLoads, TableArrays
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
+
+# ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
+# parallel loops' bodies are (parallel=True, error_model="numpy"): without parallel=True numba
+# 0.68 compiles the same loops about 3x slower (docs/performance.md), and with numba's error
+# model of parallel regions their arithmetic is the same bit for bit (one thread then agrees
+# with two where the sums do not depend on the thread count). Numba warns that nothing could be
+# parallelised.
+warnings.filterwarnings(
+    "ignore",
+    message=r"\s*The keyword argument 'parallel=True' was specified but no transformation",
+    category=NumbaPerformanceWarning,
+)
 
 WALL_CHAMBER = 0
 WALL_PLANE = 1
@@ -278,42 +295,65 @@ def pair_force(
     return fx, fy, ti, tj, lost
 
 
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _pair_range(
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
+    out,
+):  # fmt: skip
+    """Pair forces of the list rows lo:hi (granules i) into out (n, 3) = (fx, fy, torque), which
+    it zeroes first; returns the energy those contacts dissipated, J. Arguments as in
+    ``pair_forces``."""
+    for i in range(out.shape[0]):
+        out[i, 0] = 0.0
+        out[i, 1] = 0.0
+        out[i, 2] = 0.0
+    dissipated = 0.0
+    for i in range(lo, hi):
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            fx, fy, ti, tj, de = pair_force(
+                i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
+            )
+            out[i, 0] += fx
+            out[i, 1] += fy
+            out[i, 2] += ti
+            out[j, 0] -= fx
+            out[j, 1] -= fy
+            out[j, 2] += tj
+            dissipated += de
+    return dissipated
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
     lost,
 ):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
-    one slice per chunk of i; the energy the chunk's contacts dissipated into lost[c], J.
-    Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is the
-    kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach (m) and
-    tangential: as in ``pair_force``."""
+    one slice per chunk of i, in parallel; the energy the chunk's contacts dissipated into
+    lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is
+    the kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach (m)
+    and tangential: as in ``pair_force``. One chunk runs in ``_pair_forces_serial`` (no
+    parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
-        lo = c * n // n_chunks
-        hi = (c + 1) * n // n_chunks
-        a = acc[c]
-        for i in range(n):
-            a[i, 0] = 0.0
-            a[i, 1] = 0.0
-            a[i, 2] = 0.0
-        dissipated = 0.0
-        for i in range(lo, hi):
-            for k in range(start[i], start[i + 1]):
-                j = nbr[k]
-                fx, fy, ti, tj, de = pair_force(
-                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach,
-                    tangential,
-                )  # fmt: skip
-                a[i, 0] += fx
-                a[i, 1] += fy
-                a[i, 2] += ti
-                a[j, 0] -= fx
-                a[j, 1] -= fy
-                a[j, 2] += tj
-                dissipated += de
-        lost[c] = dissipated
+        lost[c] = _pair_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, start, nbr, hist, dt, reach, tangential, acc[c],
+        )  # fmt: skip
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _pair_forces_serial(
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
+    lost,
+):  # fmt: skip
+    """``pair_forces`` for one chunk, without a parallel region."""
+    lost[0] = _pair_range(
+        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+        tangential, acc[0],
+    )  # fmt: skip
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -406,6 +446,71 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
     x[i, 1] += dt * vy
 
 
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _integrate_range(
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, acc, f, tq, held,
+    bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly, ploads,
+    x_ref, gravity, scalars,
+):  # fmt: skip
+    """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
+    fields, cand's) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap, step, reach) (a tuple:
+    a call of more than 30 arguments compiles to one numba cannot inline); returns the range's
+    (max displacement², max speed², wall dissipation, max extrapolated speed²)
+    (``_integrate``)."""
+    dt, damp, v_cap, step, reach = scalars
+    n_chunks = acc.shape[0]
+    h = 0.5 * dt
+    dmax = 0.0
+    smax = 0.0
+    umax = 0.0
+    lost = 0.0
+    for i in range(lo, hi):
+        fx, fy, t, de = wall_force(
+            i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
+        )
+        lost += de
+        for q in range(n_chunks):
+            fx += acc[q, i, 0]
+            fy += acc[q, i, 1]
+            t += acc[q, i, 2]
+        for e in range(cstart[i], cstart[i + 1]):
+            _, px, py, ti, tk, de = polygon_contact(
+                i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
+            )
+            fx += px
+            fy += py
+            t += ti
+            ploads[e, 0] = -px
+            ploads[e, 1] = -py
+            ploads[e, 2] = tk
+            ploads[e, 3] = de
+        f[i, 0] = fx
+        f[i, 1] = fy
+        tq[i] = t
+        if held[i]:
+            load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
+            if load <= bond_force[i]:
+                v[i, 0] = 0.0
+                v[i, 1] = 0.0
+                w[i] = 0.0
+                a_prev[i, 0] = 0.0
+                a_prev[i, 1] = 0.0
+                a_prev[i, 2] = 0.0
+                continue
+            held[i] = 0
+            released_step[i] = step
+            release_force[i] = load
+        _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+        ex = x[i, 0] - x_ref[i, 0]
+        ey = x[i, 1] - x_ref[i, 1]
+        dmax = max(dmax, ex * ex + ey * ey)
+        smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        ux = v[i, 0] + h * a_prev[i, 0]
+        uy = v[i, 1] + h * a_prev[i, 1]
+        umax = max(umax, ux * ux + uy * uy)
+    return dmax, smax, lost, umax
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
@@ -424,74 +529,51 @@ def _integrate(
     doc); ``step`` is the step's number; reach, m: as in ``pair_force``. The polygon bundles
     come as arguments, not as a ``Polygons``: a parallel loop takes a named tuple only from an
     argument or a constructor call (numba 0.68); the other bundles are unpacked before the loop
-    (module doc).
+    (module doc). One chunk runs in ``_integrate_serial`` (no parallel region to open).
     """
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+    held, bond_force, released_step, release_force = bonds
     rows, wall_hist = walls.rows, walls.hist
     acc, f, tq = work.acc, work.f, work.tq
-    held, bond_force, released_step, release_force = bonds
-    dt, gravity, drag, v_cap = settings.dt, settings.gravity, settings.drag, settings.v_cap
     cstart, cpoly, ploads = cand.start, cand.polygon, cand.loads
+    dt, gravity, v_cap = settings.dt, settings.gravity, settings.v_cap
+    damp = 1.0 / (1.0 + settings.drag * dt)
     n = x.shape[0]
     n_chunks = acc.shape[0]
-    damp = 1.0 / (1.0 + drag * dt)
-    h = 0.5 * dt
     for c in prange(n_chunks):
-        lo = c * n // n_chunks
-        hi = (c + 1) * n // n_chunks
-        dmax = 0.0
-        smax = 0.0
-        umax = 0.0
-        lost = 0.0
-        for i in range(lo, hi):
-            fx, fy, t, de = wall_force(
-                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
-            )
-            lost += de
-            for q in range(n_chunks):
-                fx += acc[q, i, 0]
-                fy += acc[q, i, 1]
-                t += acc[q, i, 2]
-            for e in range(cstart[i], cstart[i + 1]):
-                _, px, py, ti, tk, de = polygon_contact(
-                    i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
-                )
-                fx += px
-                fy += py
-                t += ti
-                ploads[e, 0] = -px
-                ploads[e, 1] = -py
-                ploads[e, 2] = tk
-                ploads[e, 3] = de
-            f[i, 0] = fx
-            f[i, 1] = fy
-            tq[i] = t
-            if held[i]:
-                load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
-                if load <= bond_force[i]:
-                    v[i, 0] = 0.0
-                    v[i, 1] = 0.0
-                    w[i] = 0.0
-                    a_prev[i, 0] = 0.0
-                    a_prev[i, 1] = 0.0
-                    a_prev[i, 2] = 0.0
-                    continue
-                held[i] = 0
-                released_step[i] = step
-                release_force[i] = load
-            _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-            ex = x[i, 0] - x_ref[i, 0]
-            ey = x[i, 1] - x_ref[i, 1]
-            dmax = max(dmax, ex * ex + ey * ey)
-            smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-            ux = v[i, 0] + h * a_prev[i, 0]
-            uy = v[i, 1] + h * a_prev[i, 1]
-            umax = max(umax, ux * ux + uy * uy)
+        dmax, smax, lost, umax = _integrate_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, rows, wall_hist, acc, f, tq, held, bond_force, released_step, release_force,
+            poly, table, phist, rho, cstart, cpoly, ploads, x_ref, gravity,
+            (dt, damp, v_cap, step, reach),
+        )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
         chunk[c, 2] = lost
         chunk[c, 3] = umax
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _integrate_serial(
+    granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
+    chunk, step, reach,
+):  # fmt: skip
+    """``_integrate`` for one chunk, without a parallel region."""
+    x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
+    r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+    held, bond_force, released_step, release_force = bonds
+    damp = 1.0 / (1.0 + settings.drag * settings.dt)
+    dmax, smax, lost, umax = _integrate_range(
+        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, walls.rows, walls.hist,
+        work.acc, work.f, work.tq, held, bond_force, released_step, release_force, poly, table,
+        phist, rho, cand.start, cand.polygon, cand.loads, x_ref, settings.gravity,
+        (settings.dt, damp, settings.v_cap, step, reach),
+    )  # fmt: skip
+    chunk[0, 0] = dmax
+    chunk[0, 1] = smax
+    chunk[0, 2] = lost
+    chunk[0, 3] = umax
 
 
 @njit(cache=True)
@@ -590,15 +672,26 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
                 cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
-        if pairs:
+        if pairs and n_chunks > 1:
             pair_forces(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
                 start, nbr, hist, dt, reach, tangential, work.acc, lost,
             )  # fmt: skip
-        _integrate(
-            granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-            settings, work, x_ref, chunk, settings.first_step + step, reach,
-        )  # fmt: skip
+        elif pairs:
+            _pair_forces_serial(
+                x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
+                start, nbr, hist, dt, reach, tangential, work.acc, lost,
+            )  # fmt: skip
+        if n_chunks > 1:
+            _integrate(
+                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+                settings, work, x_ref, chunk, settings.first_step + step, reach,
+            )  # fmt: skip
+        else:
+            _integrate_serial(
+                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+                settings, work, x_ref, chunk, settings.first_step + step, reach,
+            )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
         dmax = 0.0
