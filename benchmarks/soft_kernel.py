@@ -6,6 +6,8 @@ Cases (each block starts afresh from the same state; medians over blocks):
   ``--steps`` steps in one call: ns per particle-step;
 * ``shuffled``: the same bed with its rows in a fixed random order (granules that touch are far
   apart in memory): what the kernel's memory order costs;
+* ``frictionless``, ``rolling``: the bed with friction 0, or with rolling resistance μ_r = 0.05
+  (the terms the kernel skips when they are zero);
 * ``separator``: the bundled ``cases/soft-separator.toml`` run to t = 0.1 s by ``Simulation``,
   then ``SoftGranules.step(5)`` called ``--calls`` times (the separator's granule_substeps):
   µs per call, the per-call cost that a machine step pays.
@@ -14,7 +16,7 @@ Each block also prints a digest of the final positions and velocities, so that t
 can be checked for identical results. To compare two trees, run the script alternately under each
 (``PYTHONPATH=<tree>/src``), the same case list, and compare the medians:
 
-    python benchmarks/soft_kernel.py                      # all cases, ~1 min
+    python benchmarks/soft_kernel.py                      # all cases, ~1.5 min
     python benchmarks/soft_kernel.py --cases bed --blocks 5
 """
 
@@ -33,6 +35,7 @@ import numpy as np
 
 from perga.case import load_case
 from perga.contact.soft import SoftGranules
+from perga.contact.soft.laws import P_MU, P_MUR
 from perga.engine import Simulation
 from perga.model.from_case import scene_spec
 
@@ -44,9 +47,14 @@ def digest(g: SoftGranules) -> str:
     return hashlib.sha1(g.x.tobytes() + g.v.tobytes()).hexdigest()[:12]
 
 
-def bed_block(x: np.ndarray, width: float, steps: int) -> tuple[float, str]:
-    """ns per particle-step of ``steps`` steps of the bed at x, and the final digest."""
+def bed_block(
+    x: np.ndarray, width: float, steps: int, mu: float = beds.FRICTION, mur: float = 0.0
+) -> tuple[float, str]:
+    """ns per particle-step of ``steps`` steps of the bed at x with friction mu and rolling
+    resistance mur, and the final digest."""
     g = beds.soft_bed(x, width, threads=1)
+    g.params[..., P_MU] = mu
+    g.params[..., P_MUR] = mur
     g._pairs()  # first neighbour list, untimed
     t0 = time.perf_counter()
     g.step(steps)
@@ -77,7 +85,8 @@ def separator_block(state: SoftGranules, calls: int) -> tuple[float, str]:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--cases", nargs="+", default=["bed", "shuffled", "separator"])
+    cases = ["bed", "shuffled", "frictionless", "rolling", "separator"]
+    p.add_argument("--cases", nargs="+", choices=cases, default=cases)
     p.add_argument("--size", type=int, default=10_000, help="bed granules")
     p.add_argument("--steps", type=int, default=1000, help="bed steps per block")
     p.add_argument("--calls", type=int, default=2000, help="separator step(5) calls per block")
@@ -89,9 +98,11 @@ def main(argv: list[str] | None = None) -> int:
     blocks = {
         "bed": lambda: bed_block(bed.x, bed.width, args.steps),
         "shuffled": lambda: bed_block(shuffled, bed.width, args.steps),
+        "frictionless": lambda: bed_block(bed.x, bed.width, args.steps, mu=0.0),
+        "rolling": lambda: bed_block(bed.x, bed.width, args.steps, mur=0.05),
         "separator": lambda: separator_block(state, args.calls),
     }
-    unit = {"bed": "ns/particle-step", "shuffled": "ns/particle-step", "separator": "µs/call"}
+    unit = {name: "ns/particle-step" for name in cases} | {"separator": "µs/call"}
     for name in args.cases:
         blocks[name]()  # compile or load, untimed
     print(f"load {os.getloadavg()[0]:.2f}; {args.blocks} blocks")
@@ -105,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     for name in args.cases:
         f = figures[name]
         print(
-            f"{name:10s} {statistics.median(f):8.2f} {unit[name]} ({min(f):.2f}-{max(f):.2f}), "
+            f"{name:12s} {statistics.median(f):8.2f} {unit[name]} ({min(f):.2f}-{max(f):.2f}), "
             f"digest {','.join(sorted(digests[name]))}"
         )
     print(f"load {os.getloadavg()[0]:.2f}")
