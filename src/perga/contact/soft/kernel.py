@@ -62,18 +62,36 @@ bundles, only read there, are passed whole.
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
 accumulating into its own slice of ``acc``, summed per granule afterwards, so each pair is
 computed once and no two threads write the same memory (no races, results identical for a given
-n_chunks). Everything else is per granule; polygon loads and their dissipation are summed per
+n_chunks). With one chunk the pair and per-granule passes run in functions without a parallel
+region (``_pair_forces_serial``, ``_integrate_serial``): opening one costs microseconds per step
+even on one thread, which a small system pays many times over (docs/performance.md).
+Everything else is per granule; polygon loads and their dissipation are summed per
 candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
 depend on the number of threads.
 """
 
 import math
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
+from numba.core.errors import NumbaPerformanceWarning
 
-from perga.contact.soft.laws import contact_law, released, rolling_torque, touching
+from perga.contact.soft.laws import (
+    P_CLAMP,
+    P_DAMP,
+    P_DAMPT,
+    P_HERTZ,
+    P_KN,
+    P_MU,
+    P_MUR,
+    contact_law,
+    normal_force,
+    released,
+    rolling_torque,
+    touching,
+)
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import (
     Candidates,
@@ -85,6 +103,18 @@ from perga.contact.soft.polygon_forces import (
 )
 from perga.contact.soft.polygon_set import PolygonArrays, PolygonLoads, TableArrays
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
+
+# ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
+# parallel loops' bodies are (parallel=True, error_model="numpy"): without parallel=True numba
+# 0.68 compiles the same loops about 3x slower (docs/performance.md), and with numba's error
+# model of parallel regions their arithmetic is the same bit for bit (one thread then agrees
+# with two where the sums do not depend on the thread count). Numba warns that nothing could be
+# parallelised.
+warnings.filterwarnings(
+    "ignore",
+    message=r"\s*The keyword argument 'parallel=True' was specified but no transformation",
+    category=NumbaPerformanceWarning,
+)
 
 WALL_CHAMBER = 0
 WALL_PLANE = 1
@@ -180,14 +210,30 @@ class Settings(NamedTuple):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
+def pair_force(
+    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
+):  # fmt: skip
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
-    k; updates hist[k]."""
+    k; updates hist[k].
+
+    reach, m: dt times the largest extrapolated speed |v + ½ dt a_prev| of any granule, a bound
+    of the gap a pair can close in half a step (½ dt |δ̇|). A pair farther apart than r_i + r_j +
+    reach is not ``touching``: it is rejected on its squared distance, before its velocities are
+    read. tangential: whether any pair of the table has friction or tangential damping; if not,
+    the tangential law is skipped (its force is zero and its spring stays empty). Rolling
+    resistance is computed only for a pair with μ_r > 0."""
     h = 0.5 * dt
     dx = x[i, 0] - x[j, 0]
     dy = x[i, 1] - x[j, 1]
     d2 = dx * dx + dy * dy
     rs = r[i] + r[j]
+    far = rs + reach
+    if d2 > far * far:
+        xi = hist[k]
+        if xi == 0.0:
+            return 0.0, 0.0, 0.0, 0.0, 0.0
+        hist[k] = 0.0
+        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - math.sqrt(d2), xi)
     if d2 > 0.0:
         d = math.sqrt(d2)
         nx = dx / d
@@ -198,82 +244,124 @@ def pair_force(i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt):
         ny = 0.0
     vrx = v[i, 0] - v[j, 0] + h * (a_prev[i, 0] - a_prev[j, 0])
     vry = v[i, 1] - v[j, 1] + h * (a_prev[i, 1] - a_prev[j, 1])
-    wi = w[i] + h * a_prev[i, 2]
-    wj = w[j] + h * a_prev[j, 2]
     ddelta = -(vrx * nx + vry * ny)
-    if not touching(rs - d, ddelta, dt):
+    delta = rs - d
+    a = mat[i]
+    b = mat[j]
+    if not touching(delta, ddelta, dt):
         xi = hist[k]
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - d, xi)
-    tx = -ny
-    ty = nx
-    # Lever arms to the middle of the overlap, or of the gap just before first touch: they sum
-    # to d, so both discs load one common point and angular momentum is conserved.
-    half = 0.5 * (rs - d)
-    arm_i = r[i] - half
-    arm_j = r[j] - half
-    vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, delta, xi)
     m_eff = m[i] * m[j] / (m[i] + m[j])
-    a = mat[i]
-    b = mat[j]
-    fn, ft, hist[k], lost = contact_law(params, a, b, rs - d, ddelta, vt, m_eff, hist[k], dt)
-    mr = rolling_torque(
-        params,
-        a,
-        b,
-        fn,
-        wi - wj,
-        r[i] * r[j] / rs,
-        inertia[i] * inertia[j] / (inertia[i] + inertia[j]),
-        dt,
-    )
-    if mr != 0.0:
-        lost += abs(mr * (wi - wj)) * dt
-    ti = -arm_i * ft
-    tj = -arm_j * ft
-    return fn * nx + ft * tx, fn * ny + ft * ty, ti + mr, tj - mr, lost
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def pair_forces(x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, acc, lost):
-    """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
-    one slice per chunk of i; the energy the chunk's contacts dissipated into lost[c], J.
-    Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is the
-    kernel's hottest, and it ran slower taking the bundles (docs/performance.md)."""
-    n = x.shape[0]
-    n_chunks = acc.shape[0]
-    for c in prange(n_chunks):
-        lo = c * n // n_chunks
-        hi = (c + 1) * n // n_chunks
-        a = acc[c]
-        for i in range(n):
-            a[i, 0] = 0.0
-            a[i, 1] = 0.0
-            a[i, 2] = 0.0
-        dissipated = 0.0
-        for i in range(lo, hi):
-            for k in range(start[i], start[i + 1]):
-                j = nbr[k]
-                fx, fy, ti, tj, de = pair_force(
-                    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt
-                )
-                a[i, 0] += fx
-                a[i, 1] += fy
-                a[i, 2] += ti
-                a[j, 0] -= fx
-                a[j, 1] -= fy
-                a[j, 2] += tj
-                dissipated += de
-        lost[c] = dissipated
+    wi = w[i] + h * a_prev[i, 2]
+    wj = w[j] + h * a_prev[j, 2]
+    if tangential:
+        tx = -ny
+        ty = nx
+        # Lever arms to the middle of the overlap, or of the gap just before first touch: they
+        # sum to d, so both discs load one common point and angular momentum is conserved.
+        half = 0.5 * delta
+        arm_i = r[i] - half
+        arm_j = r[j] - half
+        vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
+        fn, ft, hist[k], lost = contact_law(params, a, b, delta, ddelta, vt, m_eff, hist[k], dt)
+        fx = fn * nx + ft * tx
+        fy = fn * ny + ft * ty
+        ti = -arm_i * ft
+        tj = -arm_j * ft
+    else:
+        fn, lost = normal_force(
+            params[a, b, P_KN], params[a, b, P_DAMP], params[a, b, P_HERTZ],
+            params[a, b, P_CLAMP], delta, ddelta, m_eff, dt,
+        )  # fmt: skip
+        xi = hist[k]
+        if xi != 0.0:
+            hist[k] = 0.0
+            lost += released(params, a, b, delta, xi)
+        fx = fn * nx
+        fy = fn * ny
+        ti = 0.0
+        tj = 0.0
+    if params[a, b, P_MUR] != 0.0:  # rolling resistance
+        r_eff = r[i] * r[j] / rs
+        i_red = inertia[i] * inertia[j] / (inertia[i] + inertia[j])
+        mr = rolling_torque(params, a, b, fn, wi - wj, r_eff, i_red, dt)
+        if mr != 0.0:
+            lost += abs(mr * (wi - wj)) * dt
+            ti += mr
+            tj -= mr
+    return fx, fy, ti, tj, lost
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt):
+def _pair_range(
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
+    out,
+):  # fmt: skip
+    """Pair forces of the list rows lo:hi (granules i) into out (n, 3) = (fx, fy, torque), which
+    it zeroes first; returns the energy those contacts dissipated, J. Arguments as in
+    ``pair_forces``."""
+    for i in range(out.shape[0]):
+        out[i, 0] = 0.0
+        out[i, 1] = 0.0
+        out[i, 2] = 0.0
+    dissipated = 0.0
+    for i in range(lo, hi):
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            fx, fy, ti, tj, de = pair_force(
+                i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
+            )
+            out[i, 0] += fx
+            out[i, 1] += fy
+            out[i, 2] += ti
+            out[j, 0] -= fx
+            out[j, 1] -= fy
+            out[j, 2] += tj
+            dissipated += de
+    return dissipated
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def pair_forces(
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
+    lost,
+):  # fmt: skip
+    """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
+    one slice per chunk of i, in parallel; the energy the chunk's contacts dissipated into
+    lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is
+    the kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach (m)
+    and tangential: as in ``pair_force``. One chunk runs in ``_pair_forces_serial`` (no
+    parallel region to open)."""
+    n = x.shape[0]
+    n_chunks = acc.shape[0]
+    for c in prange(n_chunks):
+        lost[c] = _pair_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, start, nbr, hist, dt, reach, tangential, acc[c],
+        )  # fmt: skip
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _pair_forces_serial(
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
+    lost,
+):  # fmt: skip
+    """``pair_forces`` for one chunk, without a parallel region."""
+    lost[0] = _pair_range(
+        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+        tangential, acc[0],
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach):
     """Sum of the wall forces and torque on granule i and the energy they dissipated:
     (fx, fy, tq, J); updates wall_hist[i]. Arrays as in ``Granules``, ``GranuleProps`` and
-    ``Walls``."""
+    ``Walls``; reach, m: as in ``pair_force`` (a granule deeper inside a chamber than reach is
+    rejected on its squared distance)."""
     h = 0.5 * dt
     ux = v[i, 0] + h * a_prev[i, 0]
     uy = v[i, 1] + h * a_prev[i, 1]
@@ -282,11 +370,21 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
     fy = 0.0
     tq = 0.0
     lost = 0.0
+    a = mat[i]
     for s in range(rows.shape[0]):
+        b = int(rows[s, 5])
         if rows[s, 0] == WALL_CHAMBER:
             dx = x[i, 0] - rows[s, 1]
             dy = x[i, 1] - rows[s, 2]
-            d = math.sqrt(dx * dx + dy * dy)
+            d2 = dx * dx + dy * dy
+            inside = rows[s, 3] - r[i] - reach
+            if inside > 0.0 and d2 < inside * inside:
+                xi = wall_hist[i, s]
+                if xi != 0.0:
+                    lost += released(params, a, b, r[i] + math.sqrt(d2) - rows[s, 3], xi)
+                    wall_hist[i, s] = 0.0
+                continue
+            d = math.sqrt(d2)
             delta = r[i] + d - rows[s, 3]
             if d > 0.0:
                 nx = -dx / d
@@ -302,21 +400,24 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
         if not touching(delta, ddelta, dt):
             xi = wall_hist[i, s]
             if xi != 0.0:
-                lost += released(params, mat[i], int(rows[s, 5]), delta, xi)
+                lost += released(params, a, b, delta, xi)
                 wall_hist[i, s] = 0.0
             continue
-        b = int(rows[s, 5])
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
         fn, ft, wall_hist[i, s], de = contact_law(
-            params, mat[i], b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
+            params, a, b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
         )
-        mr = rolling_torque(params, mat[i], b, fn, wi, r[i], inertia[i], dt)
         fx += fn * nx + ft * tx
         fy += fn * ny + ft * ty
-        tq += -r[i] * ft + mr
-        lost += de + abs(mr * wi) * dt if mr != 0.0 else de
+        if params[a, b, P_MUR] != 0.0:
+            mr = rolling_torque(params, a, b, fn, wi, r[i], inertia[i], dt)
+            tq += -r[i] * ft + mr
+            lost += de + abs(mr * wi) * dt if mr != 0.0 else de
+        else:
+            tq += -r[i] * ft
+            lost += de
     return fx, fy, tq, lost
 
 
@@ -345,97 +446,153 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
     x[i, 1] += dt * vy
 
 
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _integrate_range(
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, acc, f, tq, held,
+    bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly, ploads,
+    x_ref, gravity, scalars,
+):  # fmt: skip
+    """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
+    fields, cand's) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap, step, reach) (a tuple:
+    a call of more than 30 arguments compiles to one numba cannot inline); returns the range's
+    (max displacement², max speed², wall dissipation, max extrapolated speed²)
+    (``_integrate``)."""
+    dt, damp, v_cap, step, reach = scalars
+    n_chunks = acc.shape[0]
+    h = 0.5 * dt
+    dmax = 0.0
+    smax = 0.0
+    umax = 0.0
+    lost = 0.0
+    for i in range(lo, hi):
+        fx, fy, t, de = wall_force(
+            i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
+        )
+        lost += de
+        for q in range(n_chunks):
+            fx += acc[q, i, 0]
+            fy += acc[q, i, 1]
+            t += acc[q, i, 2]
+        for e in range(cstart[i], cstart[i + 1]):
+            _, px, py, ti, tk, de = polygon_contact(
+                i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
+            )
+            fx += px
+            fy += py
+            t += ti
+            ploads[e, 0] = -px
+            ploads[e, 1] = -py
+            ploads[e, 2] = tk
+            ploads[e, 3] = de
+        f[i, 0] = fx
+        f[i, 1] = fy
+        tq[i] = t
+        if held[i]:
+            load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
+            if load <= bond_force[i]:
+                v[i, 0] = 0.0
+                v[i, 1] = 0.0
+                w[i] = 0.0
+                a_prev[i, 0] = 0.0
+                a_prev[i, 1] = 0.0
+                a_prev[i, 2] = 0.0
+                continue
+            held[i] = 0
+            released_step[i] = step
+            release_force[i] = load
+        _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+        ex = x[i, 0] - x_ref[i, 0]
+        ey = x[i, 1] - x_ref[i, 1]
+        dmax = max(dmax, ex * ex + ey * ey)
+        smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        ux = v[i, 0] + h * a_prev[i, 0]
+        uy = v[i, 1] + h * a_prev[i, 1]
+        umax = max(umax, ux * ux + uy * uy)
+    return dmax, smax, lost, umax
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step,
+    chunk, step, reach,
 ):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
     Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
-    displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J)) of chunk
-    c (per-chunk values instead of shared reduction variables). Polygon contacts: the candidate
+    displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J), max
+    extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²)) of chunk c (per-chunk
+    values instead of shared reduction variables). Polygon contacts: the candidate
     pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
     entry e's load on its polygon and dissipation go to cand.loads[e]
     (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each granule (module
-    doc); ``step`` is the step's number. The polygon bundles come as arguments, not as a
-    ``Polygons``: a parallel loop takes a named tuple only from an argument or a constructor
-    call (numba 0.68); the other bundles are unpacked before the loop (module doc).
+    doc); ``step`` is the step's number; reach, m: as in ``pair_force``. The polygon bundles
+    come as arguments, not as a ``Polygons``: a parallel loop takes a named tuple only from an
+    argument or a constructor call (numba 0.68); the other bundles are unpacked before the loop
+    (module doc). One chunk runs in ``_integrate_serial`` (no parallel region to open).
     """
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+    held, bond_force, released_step, release_force = bonds
     rows, wall_hist = walls.rows, walls.hist
     acc, f, tq = work.acc, work.f, work.tq
-    held, bond_force, released_step, release_force = bonds
-    dt, gravity, drag, v_cap = settings.dt, settings.gravity, settings.drag, settings.v_cap
     cstart, cpoly, ploads = cand.start, cand.polygon, cand.loads
+    dt, gravity, v_cap = settings.dt, settings.gravity, settings.v_cap
+    damp = 1.0 / (1.0 + settings.drag * dt)
     n = x.shape[0]
     n_chunks = acc.shape[0]
-    damp = 1.0 / (1.0 + drag * dt)
     for c in prange(n_chunks):
-        lo = c * n // n_chunks
-        hi = (c + 1) * n // n_chunks
-        dmax = 0.0
-        smax = 0.0
-        lost = 0.0
-        for i in range(lo, hi):
-            fx, fy, t, de = wall_force(
-                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt
-            )
-            lost += de
-            for q in range(n_chunks):
-                fx += acc[q, i, 0]
-                fy += acc[q, i, 1]
-                t += acc[q, i, 2]
-            for e in range(cstart[i], cstart[i + 1]):
-                _, px, py, ti, tk, de = polygon_contact(
-                    i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
-                )
-                fx += px
-                fy += py
-                t += ti
-                ploads[e, 0] = -px
-                ploads[e, 1] = -py
-                ploads[e, 2] = tk
-                ploads[e, 3] = de
-            f[i, 0] = fx
-            f[i, 1] = fy
-            tq[i] = t
-            if held[i]:
-                load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
-                if load <= bond_force[i]:
-                    v[i, 0] = 0.0
-                    v[i, 1] = 0.0
-                    w[i] = 0.0
-                    a_prev[i, 0] = 0.0
-                    a_prev[i, 1] = 0.0
-                    a_prev[i, 2] = 0.0
-                    continue
-                held[i] = 0
-                released_step[i] = step
-                release_force[i] = load
-            _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-            ex = x[i, 0] - x_ref[i, 0]
-            ey = x[i, 1] - x_ref[i, 1]
-            dmax = max(dmax, ex * ex + ey * ey)
-            smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        dmax, smax, lost, umax = _integrate_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, rows, wall_hist, acc, f, tq, held, bond_force, released_step, release_force,
+            poly, table, phist, rho, cstart, cpoly, ploads, x_ref, gravity,
+            (dt, damp, v_cap, step, reach),
+        )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
         chunk[c, 2] = lost
+        chunk[c, 3] = umax
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _integrate_serial(
+    granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
+    chunk, step, reach,
+):  # fmt: skip
+    """``_integrate`` for one chunk, without a parallel region."""
+    x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
+    r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
+    held, bond_force, released_step, release_force = bonds
+    damp = 1.0 / (1.0 + settings.drag * settings.dt)
+    dmax, smax, lost, umax = _integrate_range(
+        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, walls.rows, walls.hist,
+        work.acc, work.f, work.tq, held, bond_force, released_step, release_force, poly, table,
+        phist, rho, cand.start, cand.polygon, cand.loads, x_ref, settings.gravity,
+        (settings.dt, damp, settings.v_cap, step, reach),
+    )  # fmt: skip
+    chunk[0, 0] = dmax
+    chunk[0, 1] = smax
+    chunk[0, 2] = lost
+    chunk[0, 3] = umax
 
 
 @njit(cache=True)
-def _stale(x, v, x_ref, skin, dt):
-    """Whether the list built at x_ref must be rebuilt: 2·max|x − x_ref| + dt·max|v| > skin."""
+def _motion(x, v, a_prev, x_ref, dt):
+    """(max |x − x_ref|², m²; max |v|², m²/s²; max |v + ½ dt a_prev|², m²/s²) over the granules:
+    the list's staleness and the pairs' reach (``pair_force``) at a call's start."""
+    h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
+    umax = 0.0
     for i in range(x.shape[0]):
         ex = x[i, 0] - x_ref[i, 0]
         ey = x[i, 1] - x_ref[i, 1]
         dmax = max(dmax, ex * ex + ey * ey)
         smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-    return 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
+        ux = v[i, 0] + h * a_prev[i, 0]
+        uy = v[i, 1] + h * a_prev[i, 1]
+        umax = max(umax, ux * ux + uy * uy)
+    return dmax, smax, umax
 
 
 @njit(cache=True)
@@ -490,13 +647,17 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
-    chunk = np.zeros((n_chunks, 3))
+    chunk = np.zeros((n_chunks, 4))
     lost = np.zeros(n_chunks)
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
     n_rebuilds = 0
-    need = settings.rebuild or (pairs and start.shape[0] != n + 1) or _stale(x, v, x_ref, skin, dt)
+    dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
+    tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
+    need = settings.rebuild or (pairs and start.shape[0] != n + 1)
+    need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
     for step in range(n_steps):
+        reach = dt * math.sqrt(umax)
         if need:
             if pairs:
                 start, nbr, hist = build(x, r, skin, start, nbr, hist)
@@ -511,22 +672,35 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
                 cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
-        if pairs:
+        if pairs and n_chunks > 1:
             pair_forces(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, work.acc, lost,
+                start, nbr, hist, dt, reach, tangential, work.acc, lost,
             )  # fmt: skip
-        _integrate(
-            granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-            settings, work, x_ref, chunk, settings.first_step + step,
-        )  # fmt: skip
+        elif pairs:
+            _pair_forces_serial(
+                x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
+                start, nbr, hist, dt, reach, tangential, work.acc, lost,
+            )  # fmt: skip
+        if n_chunks > 1:
+            _integrate(
+                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+                settings, work, x_ref, chunk, settings.first_step + step, reach,
+            )  # fmt: skip
+        else:
+            _integrate_serial(
+                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+                settings, work, x_ref, chunk, settings.first_step + step, reach,
+            )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
         dmax = 0.0
         smax = 0.0
+        umax = 0.0
         for c in range(n_chunks):
             dmax = max(dmax, chunk[c, 0])
             smax = max(smax, chunk[c, 1])
+            umax = max(umax, chunk[c, 3])
             dissipated[DISSIPATED_PAIRS] += lost[c]
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin

@@ -105,6 +105,15 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     −F_t v_t dt − ½ k_t (ξ_new² − ξ²) (Coulomb slip, tangential damping, and the O(dt²) loss of
     the spring's update ξ += v_t dt), with this step's k_t on both sides.
     """
+    fn, lost = normal_force(kn, damp, hertz, clamp, delta, ddelta, m_eff, dt)
+    ft, xi, slip = tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt)
+    return fn, ft, xi, lost + slip
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def normal_force(kn, damp, hertz, clamp, delta, ddelta, m_eff, dt):
+    """The normal half of ``contact_force`` (arguments as there): (fn, N; energy the dashpot
+    dissipated over the step, and the spring's while F_n is clamped at 0, J)."""
     half = 0.5 * dt * ddelta
     hi = max(delta + half, 0.0)
     lo = max(delta - half, 0.0)
@@ -118,6 +127,15 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
         fn = spring + damp * math.sqrt(kn * m_eff) * (hi - lo) / dt
     if fn < 0.0 and clamp != 0.0:
         fn = 0.0
+    return fn, (fn - spring) * ddelta * dt
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt):
+    """The tangential half of ``contact_force`` (arguments as there) for the normal force fn, N:
+    (ft, N; the new spring ξ, m; energy dissipated by slip, damping and the spring's update, J).
+    For a frictionless undamped contact (mu = dampt = 0) it returns ft = 0, ξ = 0 and ½ k_t ξ²,
+    the energy of a dropped spring: ``kernel.pair_force`` then skips it."""
     ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0
     stretched = xi + vt * dt
     ft = -kt * stretched - ct * vt
@@ -130,7 +148,7 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     else:  # sticking: −F_t v_t dt − ½ k_t (ξ_new² − ξ²) in closed form
         lost = vt * vt * dt * (0.5 * kt * dt + ct)
         xi = stretched
-    return fn, ft, xi, (fn - spring) * ddelta * dt + lost
+    return ft, xi, lost
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)

@@ -180,11 +180,12 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     ri = r[i]
     cx = xi - com[k, 0]
     cy = yi - com[k, 1]
-    dist = math.sqrt(cx * cx + cy * cy)
+    dist2 = cx * cx + cy * cy
     reach = rho[k] + ri
     # Skip when even the fastest approach cannot make it touch within the step:
     # |rate| <= 1.5 |v_i - v_p| + 0.5 |last rate|, |v_p| <= |v_c| + |w| (dist + r_i).
-    if dist > reach:
+    if dist2 > reach * reach:
+        dist = math.sqrt(dist2)
         bound = 1.5 * (
             math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
             + math.sqrt(pvel[k, 0] * pvel[k, 0] + pvel[k, 1] * pvel[k, 1])
