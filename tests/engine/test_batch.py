@@ -206,14 +206,19 @@ def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None
         reader.positions()
 
 
-def test_no_granules() -> None:
-    spec = SceneSpec(
+def _empty() -> SceneSpec:
+    """A rotor alone: no hammers, no granules."""
+    return SceneSpec(
         rotor=RotorSpec(omega=10.0, radius=0.1),
         hammers=(),
         granules=(),
         contacts=(),
         granule_dt=1e-5,
     )
+
+
+def test_no_granules() -> None:
+    spec = _empty()
     state = Kinematics(*BodyReader(*_parts(attach_bodies(build_machine(spec)))).read())
     assert state.positions.shape == (0, 2)
     assert state.velocities.shape == (0, 2)
@@ -339,13 +344,7 @@ def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: 
 
 
 def test_writer_no_granules() -> None:
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=10.0, radius=0.1),
-        hammers=(),
-        granules=(),
-        contacts=(),
-        granule_dt=1e-5,
-    )
+    spec = _empty()
     scene = attach_bodies(build_machine(spec))
     writer = BodyWriter(*_parts(scene))
     v, p = writer.read_internal(positions=True)

@@ -15,6 +15,7 @@ import io
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import TracebackType
+from typing import Self
 
 import numpy as np
 import pyarrow as pa
@@ -24,7 +25,25 @@ import pyarrow.parquet as pq
 _NO_HEADER = pacsv.WriteOptions(include_header=False)
 
 
-class Table:
+class _Closable:
+    """A table used as a context manager: closed on leaving the block."""
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+class Table(_Closable):
     """One CSV file with a fixed header; rows are written and flushed in blocks."""
 
     def __init__(self, path: Path, columns: Sequence[str]) -> None:
@@ -67,23 +86,12 @@ class Table:
         if not self._file.closed:
             self._file.close()
 
-    def __enter__(self) -> Table:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
 
 PART_ROWS = 1 << 20
 """Rows of a Parquet part: a part is written once it holds this many (and at close)."""
 
 
-class ParquetTable:
+class ParquetTable(_Closable):
     """A table as a Parquet dataset, the directory ``path`` (``NAME.parquet/``) of parts
     ``part-NNNNN.parquet`` that pyarrow, DuckDB, Polars and pandas read as one table. Blocks are
     kept in memory until they make :data:`PART_ROWS` rows, then written as one part, atomically
@@ -136,17 +144,6 @@ class ParquetTable:
         if not self._closed:
             self._closed = True
             self._write_part()
-
-    def __enter__(self) -> ParquetTable:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 def open_table(
