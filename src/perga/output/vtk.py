@@ -41,8 +41,9 @@ With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the system) 
 ``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
 frames: see :mod:`perga.output.vtk3d`.
 
-Each ``.pvd`` is rewritten atomically (temporary file, then ``os.replace``) after every frame,
-so a run stopped at any point leaves valid collections of the frames written so far.
+Each ``.pvd`` is extended after every frame by one write of the new entry and the closing tags
+(:class:`PvdSeries`), so a run stopped at any point leaves valid collections of the frames
+written so far.
 """
 
 from __future__ import annotations
