@@ -79,8 +79,7 @@ def _validate(args: argparse.Namespace) -> int:
             load_case(path)
         except CaseError as exc:
             failed += 1
-            for problem in exc.problems:
-                print(f"error: {problem}", file=sys.stderr)
+            _problems(exc.problems)
         else:
             print(f"ok: {path}")
     return 2 if failed else 0
@@ -225,10 +224,30 @@ def _study_from_args(args: argparse.Namespace):
 T = TypeVar("T")
 
 
+def _problems(problems: Sequence[str]) -> int:
+    """Print each problem of a bad input as an error line; returns the exit status 2."""
+    for problem in problems:
+        print(f"error: {problem}", file=sys.stderr)
+    return 2
+
+
+def _at_least_one(text: str) -> int:
+    """An argparse type: a whole number >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a whole number >= 1 (got {text!r})") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"at least 1 (got {value})")
+    return value
+
+
 def _study_options(parser: argparse.ArgumentParser) -> None:
     """The options a study on Dask shares (``_cluster``, replicates' seeds, progress)."""
     parser.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
-    parser.add_argument("--workers", type=int, help="local worker processes (default: free cores)")
+    parser.add_argument(
+        "--workers", type=_at_least_one, help="local worker processes, >= 1 (default: free cores)"
+    )
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
     parser.add_argument("--retry-failed", action="store_true", help="run failed runs again")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -273,9 +292,7 @@ def _sweep(args: argparse.Namespace) -> int:
     try:
         study = _study_from_args(args)
     except StudyError as exc:
-        for problem in exc.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        return 2
+        return _problems(exc.problems)
     start = time.perf_counter()
     result = _with_progress(
         args,
@@ -313,12 +330,7 @@ def _window(args: argparse.Namespace) -> int:
             damage_limit=args.damage_limit,
         )
     except StudyError as exc:
-        for problem in exc.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        return 2
-    if args.workers is not None and args.workers < 1:
-        print(f"error: --workers: at least 1 (got {args.workers})", file=sys.stderr)
-        return 2
+        return _problems(exc.problems)
     start = time.perf_counter()
     result = _with_progress(
         args,
@@ -369,9 +381,7 @@ def _calibrate(args: argparse.Namespace) -> int:
             workers=args.workers,
         )
     except StudyError as exc:
-        for problem in exc.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        return 2
+        return _problems(exc.problems)
     for key, value, (lo, hi) in zip(fit.keys, fit.values, fit.intervals, strict=True):
         print(f"{key} = {value:.6g}  (95 %: {lo:.6g} to {hi:.6g})")
     print(
@@ -559,9 +569,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.handler(args)
     except CaseError as exc:
-        for problem in exc.problems:
-            print(f"error: {problem}", file=sys.stderr)
-        return 2
+        return _problems(exc.problems)
 
 
 if __name__ == "__main__":
