@@ -44,9 +44,9 @@ def _sim(effects: EffectsSpec, gravity: tuple[float, float] = (0.0, 0.0)) -> Sim
 
 def test_state_rows_are_the_bodies() -> None:
     """Row 0 the rotor, then each hammer body that is not the rotor; angles, velocities and
-    angular velocities exactly the bodies' (the same floats), centres of gravity to 4 ulp of
-    the lever (x + R·cog here, Chipmunk's transform there: the same terms rounded in another
-    order)."""
+    angular velocities exactly the bodies' (the same floats), centres of gravity to 4 ulp of a
+    100 mm coordinate, the scene's scale (x + R·cog here, Chipmunk's transform there: the same
+    terms rounded in another order; a cog left out or turned wrong is off by millimetres)."""
     sim = _sim(EffectsSpec(drive=DriveSpec(inertia=0.01, torque_limit=0.1)), (0.0, -9.80665))
     sim.run(0.05)
     machine = sim.machine

@@ -73,6 +73,8 @@ class EnergyMeter:
         self._effects = machine.effects
         self._constraints = [e for e in machine.effects if isinstance(e, ConstraintLosses)]
         self._space = machine.space
+        self._gravity = tuple(machine.space.gravity)
+        """In-plane gravity, internal units (set when the machine is built, read once here)."""
         hinged = [j.b for j in machine.hinges]
         balanced = ([machine.rotor] if machine.driven else []) + hinged
         self._rows = np.array([machine.row_of(b) for b in balanced], dtype=np.int64)
@@ -102,7 +104,7 @@ class EnergyMeter:
             effect.account(before, state)
         if not self._needs_balance:
             return
-        gx, gy = self._space.gravity
+        gx, gy = self._gravity
         moment = _moment_change(
             before.table, state.table, self._rows, self._mass, self._moment, gx * dt, gy * dt
         )

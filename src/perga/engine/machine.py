@@ -134,21 +134,23 @@ class Machine:
 
     def state(self) -> MachineState:
         """The machine's bodies now, in one batch read (:class:`MachineState`)."""
-        if self._reader is None:
-            bodies = self.bodies
-            self._reader = BodyWriter(self.space, bodies)
-            self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
-        ids, space, table = self._reader.read_internal_space()
+        ids, space, table = self._batch().read_internal_space()
         _to_centres(table, self._cogs)
         return MachineState(table, ids, space)
 
     def set_loads(self, loads: FloatArray) -> None:
         """Set the force and torque of every body of :attr:`bodies` for the next step from
         ``loads`` (k, 3): fx, fy, torque, internal units, in one batch write."""
+        self._batch().write_internal_loads(loads)
+
+    def _batch(self) -> BodyWriter:
+        """The batch reader and writer of :attr:`bodies` (built at first use, when the space
+        is complete), with their centres of gravity."""
         if self._reader is None:
-            self.state()
-        assert self._reader is not None
-        self._reader.write_internal_loads(loads)
+            bodies = self.bodies
+            self._reader = BodyWriter(self.space, bodies)
+            self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
+        return self._reader
 
     @property
     def driven(self) -> bool:

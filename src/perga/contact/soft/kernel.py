@@ -501,13 +501,10 @@ def _integrate_range(
             released_step[i] = step
             release_force[i] = load
         _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-        ex = x[i, 0] - x_ref[i, 0]
-        ey = x[i, 1] - x_ref[i, 1]
-        dmax = max(dmax, ex * ex + ey * ey)
-        smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-        ux = v[i, 0] + h * a_prev[i, 0]
-        uy = v[i, 1] + h * a_prev[i, 1]
-        umax = max(umax, ux * ux + uy * uy)
+        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        dmax = max(dmax, d2)
+        smax = max(smax, s2)
+        umax = max(umax, u2)
     return dmax, smax, lost, umax
 
 
@@ -585,14 +582,22 @@ def _motion(x, v, a_prev, x_ref, dt):
     smax = 0.0
     umax = 0.0
     for i in range(x.shape[0]):
-        ex = x[i, 0] - x_ref[i, 0]
-        ey = x[i, 1] - x_ref[i, 1]
-        dmax = max(dmax, ex * ex + ey * ey)
-        smax = max(smax, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-        ux = v[i, 0] + h * a_prev[i, 0]
-        uy = v[i, 1] + h * a_prev[i, 1]
-        umax = max(umax, ux * ux + uy * uy)
+        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        dmax = max(dmax, d2)
+        smax = max(smax, s2)
+        umax = max(umax, u2)
     return dmax, smax, umax
+
+
+@njit(cache=True, inline="always")
+def _motion_of(i, x, v, a_prev, x_ref, h):
+    """Granule i's |x − x_ref|² (m²), |v|² and |v + h a_prev|² (m²/s²), h = dt/2 (inlined: the
+    caller's compile flags apply)."""
+    ex = x[i, 0] - x_ref[i, 0]
+    ey = x[i, 1] - x_ref[i, 1]
+    ux = v[i, 0] + h * a_prev[i, 0]
+    uy = v[i, 1] + h * a_prev[i, 1]
+    return ex * ex + ey * ey, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1], ux * ux + uy * uy
 
 
 @njit(cache=True)
