@@ -77,8 +77,9 @@ def main() -> None:
     sim = Simulation(spec)
     sim.run(args.start)
     timers: dict[str, float] = {}
-    for _ in range(args.steps):
-        phased_step(sim, timers)
+    with sim.contacts.running():  # as perga run holds it
+        for _ in range(args.steps):
+            phased_step(sim, timers)
     total = sum(timers.values())
     print(f"{args.case}: {args.steps} steps from t = {args.start} s, load "
           f"{os.getloadavg()[0]:.2f}; the phased step matches Simulation.step: {same}")  # fmt: skip

@@ -189,7 +189,7 @@ def run_case(
 
         frames.due(0.0)
         write_frame()
-        with StopRequest() as stop:
+        with StopRequest() as stop, sim.contacts.running():
             for _ in range(n_steps):
                 sim.step()
                 if stop.requested:

@@ -25,6 +25,7 @@ compute in them.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -97,6 +98,11 @@ class ContactModel(Protocol):
 
     def kinematics(self) -> GranuleKinematics:
         """The granules' velocities for the kicks (built on first use)."""
+        ...
+
+    def running(self) -> AbstractContextManager[None]:
+        """A context held around a run of many steps: what the steps use that is costly to
+        set up at each (soft: numba's thread count, which a step otherwise sets and restores)."""
         ...
 
     def before_machine_step(self, time: float, machine: MachineState) -> None:

@@ -197,8 +197,9 @@ class Simulation:
         if not (math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be finite and >= 0 s (got {duration})")
         n = round(duration / self.dt)
-        for _ in range(n):
-            self.step()
+        with self.contacts.running():
+            for _ in range(n):
+                self.step()
         return n
 
     def energy(self) -> EnergyLedger:

@@ -20,6 +20,7 @@ part of the contacts' dissipation (the cell is a contact).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import AbstractContextManager, nullcontext
 
 import numpy as np
 import pymunk
@@ -110,6 +111,10 @@ class RigidContacts:
     def impacts(self) -> list[Impact]:
         """Impacts recorded so far (empty if recording is off)."""
         return [] if self.recorder is None else self.recorder.impacts
+
+    def running(self) -> AbstractContextManager[None]:
+        """Nothing to hold over a run: Chipmunk steps on one thread."""
+        return nullcontext()
 
     def kinematics(self) -> _Kinematics:
         """The granule bodies' velocities, read and written in one ``pymunk.batch`` pass each."""
