@@ -75,6 +75,9 @@ _PV = _F.POSITION | _F.VELOCITY
 _V_ID = _F.VELOCITY | _F.BODY_ID
 _LOADS = _F.FORCE | _F.TORQUE
 _LOADS_ID = _LOADS | _F.BODY_ID
+_ALL_ID = _ALL | _F.BODY_ID
+_ALL_WIDTH = 6
+_NO_CENTRES = np.zeros((0, 2))
 
 
 @functools.cache
@@ -135,17 +138,19 @@ class BodyReader:
         p, v, w = self._read(_MOTION)
         return p * u.LENGTH, v * u.VELOCITY, w[:, 0] * u.ANGULAR_VELOCITY
 
-    def read_internal_space(self) -> tuple[NDArray[np.uintp], FloatArray, FloatArray]:
+    def read_internal_space(
+        self, centres: FloatArray | None = None
+    ) -> tuple[NDArray[np.uintp], FloatArray, FloatArray]:
         """Every body of the space and the chosen ones, internal units, from a single pass: the
         ids of all bodies (in the batch walk's order), their rows (n_all, 6) and the chosen
         bodies' rows (n, 6), each x, y (position), angle, vx, vy (velocity), ω (angular
-        velocity); fresh arrays."""
-        fetch, width, _ = _layout(_ALL)
-        ids, floats = self._fetch(fetch, width)
-        out = np.empty((len(self._bodies), width))
-        if self._bodies:
-            _take_rows(floats, width, self._rows_of(ids), out)
-        return ids.copy(), floats.reshape(ids.size, width).copy(), out
+        velocity); fresh arrays. With ``centres`` (n, 2), the chosen rows' x, y are moved from
+        the body's local origin to the point ``centres[j]`` of its frame (its centre of
+        gravity)."""
+        ids, floats = self._fetch(_ALL_ID, _ALL_WIDTH)
+        out = np.empty((len(self._bodies), _ALL_WIDTH))
+        self._take(ids, floats, _NO_CENTRES if centres is None else centres, out)
+        return ids.copy(), floats.reshape(ids.size, _ALL_WIDTH).copy(), out
 
     # --- internals ---------------------------------------------------------------------------
 
@@ -158,6 +163,15 @@ class BodyReader:
         ids, floats = self._fetch(fetch, width)
         table = floats.reshape(ids.size, width)[self._rows_of(ids)]  # fancy indexing: a copy
         return [table[:, c] for c in columns]
+
+    def _take(
+        self, ids: NDArray[np.uintp], floats: FloatArray, centres: FloatArray, out: FloatArray
+    ) -> None:
+        """Copy the chosen bodies' rows of a fetch into ``out`` (one compiled call when the
+        cached rows hold, the usual case)."""
+        if not _take_rows(floats, ids, self._rows, self._ids, centres, out):
+            self._rows = self._locate(ids)
+            _take_rows(floats, ids, self._rows, self._ids, centres, out)
 
     def _rows_of(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
         """The chosen bodies' rows in a batch read whose id column is ``ids`` (cached, checked)."""
@@ -236,8 +250,7 @@ class BodyWriter(BodyReader):
         fetch, width, _ = _layout(_PV if positions else _F.VELOCITY)
         ids, floats = self._fetch(fetch, width)
         out = np.empty((len(self._bodies), width))
-        if self._bodies:
-            _take_rows(floats, width, self._rows_of(ids), out)
+        self._take(ids, floats, _NO_CENTRES, out)
         return (out[:, 2:4], out[:, 0:2]) if positions else (out, None)
 
     def write_internal_velocities(self, velocities: FloatArray) -> None:
@@ -325,12 +338,32 @@ def _finite(values: np.ndarray) -> bool:
 
 
 @numba.njit(cache=True)
-def _take_rows(floats: np.ndarray, width: int, rows: np.ndarray, out: np.ndarray) -> None:
-    """Copy body ``rows[j]`` of the flat float buffer (``width`` per body) into ``out[j]``."""
+def _take_rows(
+    floats: np.ndarray,
+    ids: np.ndarray,
+    rows: np.ndarray,
+    expected: np.ndarray,
+    centres: np.ndarray,
+    out: np.ndarray,
+) -> bool:
+    """If ``rows`` of a fetch (flat ``floats``, ``out.shape[1]`` per body; id column ``ids``)
+    hold the ids ``expected``, copy body ``rows[j]`` into ``out[j]`` and return True (else
+    False, nothing copied). With ``centres`` (one row per body; none: shape (0, 2)) a row's
+    first three values being x, y, angle, x, y move to the body-frame point ``centres[j]``:
+    x + R(angle)·c."""
+    if not _rows_hold(ids, rows, expected):
+        return False
+    width = out.shape[1]
     for j in range(rows.size):
         base = rows[j] * width
         for c in range(width):
             out[j, c] = floats[base + c]
+    if centres.shape[0] > 0:
+        for j in range(rows.size):
+            c, s = math.cos(out[j, 2]), math.sin(out[j, 2])
+            out[j, 0] += c * centres[j, 0] - s * centres[j, 1]
+            out[j, 1] += s * centres[j, 0] + c * centres[j, 1]
+    return True
 
 
 @numba.njit(cache=True)

@@ -32,7 +32,6 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 import pymunk
 from numpy.typing import NDArray
@@ -86,16 +85,6 @@ class MachineState:
         return self.table[:, 5]
 
 
-@numba.njit(cache=True)
-def _to_centres(table: FloatArray, cogs: FloatArray) -> None:
-    """Move each row's position (the body's local origin) to its centre of gravity ``cogs``
-    (body frame), in place: x_c = x + R(angle)·cog."""
-    for k in range(table.shape[0]):
-        c, s = math.cos(table[k, 2]), math.sin(table[k, 2])
-        table[k, 0] += c * cogs[k, 0] - s * cogs[k, 1]
-        table[k, 1] += s * cogs[k, 0] + c * cogs[k, 1]
-
-
 @dataclass
 class Machine:
     """The Pymunk objects of the machine.
@@ -134,8 +123,7 @@ class Machine:
 
     def state(self) -> MachineState:
         """The machine's bodies now, in one batch read (:class:`MachineState`)."""
-        ids, space, table = self._batch().read_internal_space()
-        _to_centres(table, self._cogs)
+        ids, space, table = self._batch().read_internal_space(self._cogs)
         return MachineState(table, ids, space)
 
     def set_loads(self, loads: FloatArray) -> None:
