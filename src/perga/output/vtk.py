@@ -1,4 +1,5 @@
-"""ParaView output: binary, zlib-compressed ``.vtu`` files written by VTK (through pyvista) and
+"""ParaView output: binary, zlib-compressed ``.vtu`` files written by VTK (:mod:`perga.output.
+vtk_grid`) and
 ``.pvd`` collections whose ``timestep`` is simulated time, s (design notes, section 6).
 
 Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
@@ -48,7 +49,6 @@ written so far.
 
 from __future__ import annotations
 
-import itertools
 import os
 from collections.abc import Sequence
 from pathlib import Path
@@ -56,14 +56,15 @@ from typing import BinaryIO
 from xml.sax.saxutils import escape
 
 import numpy as np
-import pyvista as pv
 from numpy.typing import NDArray
+from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 from perga.geometry.polygon import outline_or_circle
 from perga.model.frame import Frame, MachineFrame
 from perga.model.records import Events, Impact
 from perga.model.spec import RotorSpec, SceneSpec
-from perga.output import vtk3d
+from perga.output import vtk3d, vtk_grid
+from perga.output.vtk_grid import POLY_LINE, POLYGON
 
 FloatArray = NDArray[np.float64]
 
@@ -105,10 +106,10 @@ class PvdSeries:
         """The ``.pvd`` file."""
         return self.directory / f"{self.name}.pvd"
 
-    def add(self, time: float, mesh: pv.DataSet) -> None:
+    def add(self, time: float, mesh: vtkUnstructuredGrid) -> None:
         """Write ``mesh`` as the frame at ``time`` (s), then add it to the index."""
         file = f"{self.name}_{len(self.entries):06d}.vtu"
-        mesh.save(self.directory / file, binary=True, compression="zlib")
+        vtk_grid.save(mesh, self.directory / file)
         self.entries.append((time, file))
         entry = (
             f'    <DataSet timestep="{float(time)!r}" group="" part="0" file="{escape(file)}" />\n'
@@ -134,16 +135,10 @@ class PvdSeries:
             self._fd = None
 
 
-def _grid(
-    cells: list[NDArray[np.int64]], cell_type: int, points: FloatArray
-) -> pv.UnstructuredGrid:
-    """Cells of one type, each a list of point indices, over 2-D ``points`` (m) lifted to z = 0."""
-    flat = np.concatenate([np.concatenate(([len(c)], c)) for c in cells]) if cells else []
-    return pv.UnstructuredGrid(
-        np.asarray(flat, dtype=np.int64),
-        np.full(len(cells), cell_type, dtype=np.uint8),
-        _lift(points),
-    )
+def _polylines(lines: list[NDArray[np.int64]], points: FloatArray) -> vtkUnstructuredGrid:
+    """One VTK_POLY_LINE through ``points`` (m) per list of point indices in ``lines``."""
+    offsets = np.cumsum([0] + [len(line) for line in lines])
+    return vtk_grid.grid(points, POLY_LINE, offsets, np.concatenate(lines))
 
 
 def _lift(points: FloatArray) -> FloatArray:
@@ -151,14 +146,6 @@ def _lift(points: FloatArray) -> FloatArray:
     out = np.zeros((len(points), 3))
     out[:, :2] = points
     return out
-
-
-def _vertices(n: int, points: FloatArray) -> pv.UnstructuredGrid:
-    """``n`` points (m), each with its own VTK_VERTEX cell."""
-    cells = np.column_stack((np.ones(n, dtype=np.int64), np.arange(n, dtype=np.int64)))
-    return pv.UnstructuredGrid(
-        cells.ravel(), np.full(n, pv.CellType.VERTEX, dtype=np.uint8), _lift(points)
-    )
 
 
 class VtkRecorder:
@@ -197,8 +184,7 @@ class VtkRecorder:
             c = spec.chamber
             wall = outline_or_circle(c.outline, c.radius, CHAMBER_SEGMENTS)
             ring = np.append(np.arange(len(wall)), 0)
-            chamber = _grid([ring], pv.CellType.POLY_LINE, wall)
-            chamber.save(self.directory / "chamber.vtu", binary=True, compression="zlib")
+            vtk_grid.save(_polylines([ring], wall), self.directory / "chamber.vtu")
         if spec.drawing is not None:
             self._start_3d()
         self._started = True
@@ -216,8 +202,7 @@ class VtkRecorder:
             c = spec.chamber
             inner = outline_or_circle(c.outline, c.radius, CHAMBER_SEGMENTS)
             part = vtk3d.wall(inner, c.wall_thickness, drawing.chamber_height)
-            chamber = vtk3d.part_grid(part)
-            chamber.save(self.directory / "chamber3d.vtu", binary=True, compression="zlib")
+            vtk_grid.save(vtk3d.part_grid(part), self.directory / "chamber3d.vtu")
 
     def record(self, frame: Frame, events: Events) -> None:
         """Write the granule and machine frames of ``frame`` and update both ``.pvd``."""
@@ -230,16 +215,16 @@ class VtkRecorder:
         self._impacts += new
         self._count([i.granule for i in new], int(g.ids.max(initial=-1)) + 1)
 
-        mesh = _vertices(len(p), p)
-        data = mesh.point_data
-        data["radius"] = g.radii
-        data["velocity"] = _lift(v)
-        data["speed"] = speed
-        data["angular_velocity"] = w
-        data["kinetic_energy"] = 0.5 * g.masses * speed**2 + 0.5 * g.inertia * w**2
-        data["id"] = g.ids
-        data["material"] = g.materials
-        data["impacts"] = self._impact_count[g.ids]
+        data: dict[str, NDArray] = {
+            "radius": g.radii,
+            "velocity": _lift(v),
+            "speed": speed,
+            "angular_velocity": w,
+            "kinetic_energy": 0.5 * g.masses * speed**2 + 0.5 * g.inertia * w**2,
+            "id": g.ids,
+            "material": g.materials,
+            "impacts": self._impact_count[g.ids],
+        }
         if self._held:
             data["held"] = g.held.astype(np.uint8)
         if self._damage:
@@ -249,6 +234,7 @@ class VtkRecorder:
         drawing = self.spec.drawing
         if drawing is not None:
             data["thickness"] = np.full(len(p), drawing.granule_thickness)
+        mesh = vtk_grid.vertices(p, data)
         self.granules.add(t, mesh)
         cell_data = machine_cell_data(self.spec, frame.machine)
         origins, angles = _poses(frame.machine)
@@ -288,7 +274,7 @@ class VtkRecorder:
         self._scratch.close()
         size = self.scratch.stat().st_size // (8 * SCRATCH_COLUMNS)
         if size == 0:  # no granule in any frame: an empty file
-            pv.UnstructuredGrid().save(self.directory / "trajectories.vtu", binary=True)
+            vtk_grid.save(vtk_grid.vertices(np.zeros((0, 2))), self.directory / "trajectories.vtu")
             return
         shape = (size, SCRATCH_COLUMNS)
         scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=shape)
@@ -304,23 +290,21 @@ class VtkRecorder:
             speed[a : a + len(rows)] = rows[:, 4]
         del scratch
         granules, counts = np.unique(ids[order], return_counts=True)
-        cells = np.insert(np.arange(size, dtype=np.int64), np.cumsum(counts) - counts, counts)
-        trajectories = pv.UnstructuredGrid(
-            cells,
-            np.full(len(granules), pv.CellType.POLY_LINE, dtype=np.uint8),
+        offsets = np.concatenate(([0], np.cumsum(counts)))
+        trajectories = vtk_grid.grid(
             points,
-            deep=False,
+            POLY_LINE,
+            offsets,
+            np.arange(size, dtype=np.int64),
+            point_data={"time": time, "speed": speed},
+            cell_data={"id": granules},
         )
-        trajectories.point_data["time"] = time
-        trajectories.point_data["speed"] = speed
-        trajectories.cell_data["id"] = granules
-        trajectories.save(self.directory / "trajectories.vtu", binary=True, compression="zlib")
+        vtk_grid.save(trajectories, self.directory / "trajectories.vtu")
 
     def _write_impacts(self) -> None:
         """``impacts.vtu``: every granule-hammer impact of the run."""
         impacts = self._impacts
         points = np.array([i.point for i in impacts], dtype=float).reshape(-1, 2)
-        mesh = _vertices(len(impacts), points)
         columns: dict[str, np.ndarray] = {
             name: np.array([getattr(i, name) for i in impacts], dtype=float)
             for name in ("time", "normal_impulse", "granule_energy_gain", "dissipated")
@@ -330,10 +314,7 @@ class VtkRecorder:
         for name in ("granule", "hammer"):
             columns[name] = np.array([getattr(i, name) for i in impacts], dtype=np.int64)
         columns["normal"] = _lift(np.array([i.normal for i in impacts], dtype=float).reshape(-1, 2))
-        for name, values in columns.items():
-            # through VTK: pyvista refuses empty arrays, a run without impacts has them
-            mesh.GetPointData().AddArray(pv.convert_array(values, name=name))
-        mesh.save(self.directory / "impacts.vtu", binary=True, compression="zlib")
+        vtk_grid.save(vtk_grid.vertices(points, columns), self.directory / "impacts.vtu")
 
 
 def _disc(rotor: RotorSpec) -> FloatArray:
@@ -366,7 +347,7 @@ def machine_mesh(
     origins: FloatArray,
     angles: FloatArray,
     cell_data: dict[str, NDArray],
-) -> pv.UnstructuredGrid:
+) -> vtkUnstructuredGrid:
     """The parts (``outlines`` in their own frames, m) posed at ``origins`` (m) and ``angles``
     (rad), as polygons with ``cell_data``."""
     posed = []
@@ -374,9 +355,8 @@ def machine_mesh(
         c, s = np.cos(angle), np.sin(angle)
         x, y = outline[:, 0], outline[:, 1]
         posed.append(np.column_stack((origin[0] + c * x - s * y, origin[1] + s * x + c * y)))
-    ends = np.cumsum([0] + [len(o) for o in posed])
-    cells = [np.arange(a, b, dtype=np.int64) for a, b in itertools.pairwise(ends)]
-    mesh = _grid(cells, pv.CellType.POLYGON, np.concatenate(posed))
-    for name, values in cell_data.items():
-        mesh.cell_data[name] = values
-    return mesh
+    offsets = np.cumsum([0] + [len(o) for o in posed])
+    points = np.concatenate(posed)
+    return vtk_grid.grid(
+        points, POLYGON, offsets, np.arange(len(points), dtype=np.int64), cell_data=cell_data
+    )

@@ -30,13 +30,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pyvista as pv
 import trimesh
 from numpy.typing import ArrayLike, NDArray
+from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 from perga.geometry.extrude import extrude
 from perga.geometry.polygon import FloatArray, clean, counter_clockwise, signed_area
 from perga.geometry.wall import wall_pieces
+from perga.output import vtk_grid
+from perga.output.vtk_grid import TRIANGLE
 
 
 @dataclass(frozen=True)
@@ -58,8 +60,13 @@ def extruded(outline: ArrayLike, thickness: float) -> Part:
     return Part(np.array(mesh.vertices, dtype=float), np.array(mesh.faces, dtype=np.int64))
 
 
-def _triangles(vertices: FloatArray, triangles: NDArray[np.int64]) -> pv.UnstructuredGrid:
-    return pv.UnstructuredGrid({pv.CellType.TRIANGLE: triangles}, vertices)
+def _triangles(
+    vertices: FloatArray,
+    triangles: NDArray[np.int64],
+    cell_data: dict[str, NDArray] | None = None,
+) -> vtkUnstructuredGrid:
+    offsets = np.arange(0, 3 * len(triangles) + 1, 3, dtype=np.int64)
+    return vtk_grid.grid(vertices, TRIANGLE, offsets, triangles.ravel(), cell_data=cell_data)
 
 
 class Machine3D:
@@ -79,7 +86,7 @@ class Machine3D:
 
     def mesh(
         self, origins: FloatArray, angles: FloatArray, cell_data: dict[str, NDArray]
-    ) -> pv.UnstructuredGrid:
+    ) -> vtkUnstructuredGrid:
         """The parts with their frames at ``origins`` (m) turned by ``angles`` (rad);
         ``cell_data`` holds one value per part (hammers, then rotor)."""
         angle = np.asarray(angles)[self.vertex_part]
@@ -93,10 +100,11 @@ class Machine3D:
                 self.local[:, 2],
             )
         )
-        grid = _triangles(points, self.triangles)
-        for name, values in cell_data.items():
-            grid.cell_data[name] = np.repeat(np.asarray(values), self.triangle_counts)
-        return grid
+        per_triangle = {
+            name: np.repeat(np.asarray(values), self.triangle_counts, axis=0)
+            for name, values in cell_data.items()
+        }
+        return _triangles(points, self.triangles, per_triangle)
 
 
 def wall(inner: ArrayLike, wall_thickness: float, height: float) -> Part:
@@ -120,6 +128,6 @@ def wall(inner: ArrayLike, wall_thickness: float, height: float) -> Part:
     return Part(np.array(mesh.vertices, dtype=float), np.array(mesh.faces, dtype=np.int64))
 
 
-def part_grid(part: Part) -> pv.UnstructuredGrid:
+def part_grid(part: Part) -> vtkUnstructuredGrid:
     """A part as VTK_TRIANGLE cells."""
     return _triangles(part.vertices, part.triangles)
