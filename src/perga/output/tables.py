@@ -11,7 +11,6 @@ float64 (Arrow writes ``1`` and ``0.00001`` where ``repr`` writes ``1.0`` and ``
 from __future__ import annotations
 
 import csv
-import io
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import TracebackType
@@ -22,7 +21,7 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-_NO_HEADER = pacsv.WriteOptions(include_header=False)
+_NO_HEADER = pacsv.WriteOptions(include_header=False, eol="\r\n")  # the csv module's line end
 
 
 class _Closable:
@@ -75,11 +74,10 @@ class Table(_Closable):
                 f"{self.path.name}: {len(columns)} columns given, header has {len(self.columns)}"
             )
         block = pa.table([pa.array(np.asarray(c)) for c in columns], names=list(self.columns))
-        text = io.BytesIO()
-        pacsv.write_csv(block, text, _NO_HEADER)
-        self._file.write(text.getvalue().decode("utf-8").replace("\n", "\r\n"))
+        self._file.flush()  # the text layer's rows first, then the block's bytes after them
+        pacsv.write_csv(block, self._file.buffer, _NO_HEADER)
         self.rows += block.num_rows
-        self._file.flush()
+        self._file.buffer.flush()
 
     def close(self) -> None:
         """Close the file (idempotent)."""
