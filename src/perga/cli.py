@@ -1,6 +1,9 @@
 """The ``perga`` command line: parses, calls the library, prints.
 
-Exit codes: 0 success, 2 bad input (the problems are printed, never a traceback), 1 a failed run.
+Exit codes: 0 success, 2 bad input (the problems are printed, never a traceback), 1 a failed run,
+128 + the signal's number after a stop signal (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP;
+:mod:`perga.stopping`). Everything heavy is imported inside the commands, after the stop signals
+are handled, so a signal during start-up is a clean stop too.
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from perga import __version__
-from perga.case import CaseError, load_case
+from perga.stopping import StopRequest, StopSignal, exit_status, raise_on_stop_signals
 
 if TYPE_CHECKING:
     pass
@@ -28,6 +31,7 @@ def _default_case(name: str) -> Path:
 
 
 def _paper_check(args: argparse.Namespace) -> int:
+    from perga.case import load_case
     from perga.studies.paper_check import Params, check_paper
     from perga.studies.paper_report import format_json, format_markdown, format_text, write_plots
 
@@ -73,6 +77,8 @@ def _accuracy(args: argparse.Namespace) -> int:
 
 
 def _validate(args: argparse.Namespace) -> int:
+    from perga.case import CaseError, load_case
+
     failed = 0
     for path in args.cases:
         try:
@@ -95,16 +101,23 @@ def _schema(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
+    with StopRequest() as stop:  # the imports and the case, never stopped halfway
+        from tqdm import tqdm
 
-    from perga.runner import RunStoppedError, prepare_directory, run_case
+        from perga.case import load_case
+        from perga.runner import RunStoppedError, prepare_directory, run_case
 
-    case = load_case(args.case, overrides=args.set or ())
+        case = load_case(args.case, overrides=args.set or ())
+        stop.check()
     directory = args.output or Path(case.output.directory.format(case=args.case.stem))
     try:
         prepare_directory(directory, args.overwrite)
     except FileExistsError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file in the way, no permission, a read-only file system
+        print(f"error: cannot make the run directory {directory}: {exc.strerror or exc}; "
+              "choose another -o DIR", file=sys.stderr)  # fmt: skip
         return 2
     bar = tqdm(
         total=case.solver.duration,
@@ -119,13 +132,18 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         summary = run_case(case, args.case, directory, progress)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         bar.close()
         print(f"interrupted: everything up to now is in {directory}", file=sys.stderr)
-        return 130
+        return exit_status(exc)
     except RunStoppedError as exc:
         bar.close()
         print(f"error: the run stopped: {exc}\nwhat was written is in {directory}", file=sys.stderr)
+        return 1
+    except OSError as exc:  # a full disk, a file system gone read-only, a removed directory
+        bar.close()
+        print(f"error: the run could not write its output: {exc}\nwhat was written is in "
+              f"{directory} (summary.json says where it stopped)", file=sys.stderr)  # fmt: skip
         return 1
     bar.close()
     print(
@@ -168,6 +186,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from perga.case import load_case
     from perga.stats import load_run
     from perga.studies.compare import analyse, run_paper_study
     from perga.studies.compare_report import write_report
@@ -258,11 +277,9 @@ def _cluster(args: argparse.Namespace) -> dict[str, Any]:
     return {"scheduler": args.scheduler, "workers": args.workers, "retry_failed": args.retry_failed}
 
 
-def _with_progress(
-    args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]
-) -> T | None:
-    """``call(progress)`` under a progress bar (unless ``args.quiet``); None after Ctrl-C, having
-    said where the finished runs are and how to resume."""
+def _with_progress(args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]) -> T:
+    """``call(progress)`` under a progress bar (unless ``args.quiet``); after a stop signal it
+    says where the finished runs are and how to resume, and re-raises."""
     bar = _bar(0, args.quiet)
 
     def progress(done: int, total: int) -> None:
@@ -279,7 +296,7 @@ def _with_progress(
             "run the same command again to resume",
             file=sys.stderr,
         )
-        return None
+        raise
     finally:
         bar.close()
 
@@ -298,8 +315,6 @@ def _sweep(args: argparse.Namespace) -> int:
         args,
         lambda progress: sweep(study, args.output, progress=progress, **_cluster(args)),
     )
-    if result is None:
-        return 130
     plots = write_plots(result.rows, list(study.parameters), study.metrics, args.output)
     print(
         f"{len(result.rows)} runs ({result.ran} run now, {result.reused} found finished, "
@@ -336,8 +351,6 @@ def _window(args: argparse.Namespace) -> int:
         args,
         lambda progress: run_window(window, args.output, progress=progress, **_cluster(args)),
     )
-    if result is None:
-        return 130
     best = result.best.point
     if best is None:
         verdict = "no point gave both a release and a damage fraction"
@@ -364,6 +377,7 @@ def _window(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
+    from perga.case import load_case
     from perga.studies.calibrate import calibrate
     from perga.studies.study_file import StudyError
 
@@ -565,11 +579,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``perga`` console script."""
-    args = build_parser().parse_args(argv)
+    raise_on_stop_signals()
     try:
-        return args.handler(args)
-    except CaseError as exc:
-        return _problems(exc.problems)
+        with StopRequest() as stop:  # imports are never interrupted halfway (perga.stopping)
+            from perga.case import CaseError
+
+            args = build_parser().parse_args(argv)
+            stop.check()
+        try:
+            return args.handler(args)
+        except CaseError as exc:
+            return _problems(exc.problems)
+    except KeyboardInterrupt as exc:  # a stop signal (perga.stopping) outside a run's own report
+        name = exc.name if isinstance(exc, StopSignal) else "SIGINT"
+        print(f"stopped by {name}", file=sys.stderr)
+        return exit_status(exc)
 
 
 if __name__ == "__main__":

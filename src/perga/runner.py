@@ -14,8 +14,6 @@ from __future__ import annotations
 import json
 import math
 import shutil
-import signal
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -30,6 +28,7 @@ from perga.model.frame import Frame
 from perga.model.from_case import scene_spec
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
+from perga.stopping import StopRequest, describe
 
 
 class RunStoppedError(Exception):
@@ -122,28 +121,6 @@ def check_population(frame: Frame) -> None:
         )
 
 
-class StopRequest:
-    """Ctrl-C as a flag checked between steps. A KeyboardInterrupt raised inside a Pymunk
-    callback is swallowed by cffi (the run would go on), so SIGINT only sets the flag and the
-    loop stops at the next step boundary. Installed only in the main thread."""
-
-    def __init__(self) -> None:
-        self.requested = False
-        self._previous: object = None
-
-    def __enter__(self) -> StopRequest:
-        if threading.current_thread() is threading.main_thread():
-            self._previous = signal.signal(signal.SIGINT, self._handle)
-        return self
-
-    def _handle(self, _signum: int, _frame: object) -> None:
-        self.requested = True
-
-    def __exit__(self, *_exc: object) -> None:
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-
-
 Progress = Callable[[float, float, int], None]
 """progress(simulated time s, duration s, steps) — called now and then by :func:`run_case`."""
 
@@ -152,65 +129,67 @@ def run_case(
     case: Case, case_path: Path, directory: Path, progress: Progress | None = None
 ) -> RunSummary:
     """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
-    is also written to summary.json. KeyboardInterrupt and RunStoppedError are recorded in the
-    summary and re-raised after everything written so far is flushed."""
-    write_case_copy(case, case_path, directory / "case.toml")
+    is also written to summary.json. A stop signal (:mod:`perga.stopping`; deferred to the end of
+    the build or the next step boundary) and RunStoppedError are recorded in the summary and
+    re-raised after everything written so far is flushed."""
     summary = RunSummary(case=str(case_path.resolve()), overrides=list(case.overrides))
     start = time.perf_counter()
     recorders: list[Recorder] = []
     sim: Simulation | None = None
-    try:
-        spec = scene_spec(case)
-        record = case.output.record
-        options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
-        sim = Simulation(spec, **options)
-        summary.dt, summary.granules, summary.hammers = (
-            spec.granule_dt,
-            len(spec.granules),
-            len(spec.hammers),
-        )
-        assert spec.plan is not None and spec.chamber is not None
-        summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
-        write_scene(directory, spec)
-        recorders = make_recorders(record, directory, spec, case.output.granule_table)
-        frames = PhaseLock(case.output.every)
-        n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-        outer, thickness = spec.chamber.outer_radius, spec.chamber.wall_thickness
-        report_every = max(1, n_steps // 200)
-        contacts = "vtk" in record
+    with StopRequest() as stop:
+        try:
+            write_case_copy(case, case_path, directory / "case.toml")
+            spec = scene_spec(case)
+            record = case.output.record
+            options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
+            sim = Simulation(spec, **options)
+            summary.dt, summary.granules, summary.hammers = (
+                spec.granule_dt,
+                len(spec.granules),
+                len(spec.hammers),
+            )
+            assert spec.plan is not None and spec.chamber is not None
+            summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
+            stop.check()
+            write_scene(directory, spec)
+            recorders = make_recorders(record, directory, spec, case.output.granule_table)
+            frames = PhaseLock(case.output.every)
+            n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
+            outer, thickness = spec.chamber.outer_radius, spec.chamber.wall_thickness
+            report_every = max(1, n_steps // 200)
+            contacts = "vtk" in record
 
-        def write_frame() -> None:
-            frame = sim.frame(contacts=contacts)
-            check_granules(frame, outer, thickness, sim.dt)
-            check_population(frame)
-            for recorder in recorders:
-                recorder.record(frame, sim.events())
-            summary.frames += 1
+            def write_frame() -> None:
+                frame = sim.frame(contacts=contacts)
+                check_granules(frame, outer, thickness, sim.dt)
+                check_population(frame)
+                for recorder in recorders:
+                    recorder.record(frame, sim.events())
+                summary.frames += 1
 
-        frames.due(0.0)
-        write_frame()
-        with StopRequest() as stop, sim.contacts.running():
-            for _ in range(n_steps):
-                sim.step()
-                if stop.requested:
-                    raise KeyboardInterrupt
-                last = sim.steps == n_steps
-                if frames.due(sim.time) or last:
-                    write_frame()
-                if progress and (sim.steps % report_every == 0 or last):
-                    progress(sim.time, case.solver.duration, sim.steps)
-        summary.status = "completed"
-    except KeyboardInterrupt:
-        summary.status, summary.reason = "interrupted", "stopped by the user (Ctrl-C)"
-        raise
-    except RunStoppedError as exc:
-        summary.status, summary.reason = "failed", str(exc)
-        raise
-    except Exception as exc:
-        summary.status, summary.reason = "failed", f"{type(exc).__name__}: {exc}"
-        raise
-    finally:
-        _finish(summary, sim, recorders, time.perf_counter() - start, directory)
+            frames.due(0.0)
+            write_frame()
+            with sim.contacts.running():
+                for _ in range(n_steps):
+                    sim.step()
+                    stop.check()
+                    last = sim.steps == n_steps
+                    if frames.due(sim.time) or last:
+                        write_frame()
+                    if progress and (sim.steps % report_every == 0 or last):
+                        progress(sim.time, case.solver.duration, sim.steps)
+            summary.status = "completed"
+        except KeyboardInterrupt as exc:
+            summary.status, summary.reason = "interrupted", describe(exc)
+            raise
+        except RunStoppedError as exc:
+            summary.status, summary.reason = "failed", str(exc)
+            raise
+        except Exception as exc:
+            summary.status, summary.reason = "failed", f"{type(exc).__name__}: {exc}"
+            raise
+        finally:
+            _finish(summary, sim, recorders, time.perf_counter() - start, directory)
     return summary
 
 
@@ -254,4 +233,19 @@ def _finish(
             closure = summary.energy.get("closure", 0.0)
             if abs(closure) > 0.01:
                 summary.warnings.append(f"energy ledger closes to {closure:.2%} only (> 1 %)")
-    (directory / "summary.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
+    text = json.dumps(_finite_or_null(asdict(summary)), indent=2, allow_nan=False) + "\n"
+    temporary = directory / ".summary.json.tmp"  # written whole, then renamed over the old one
+    temporary.write_text(text)
+    temporary.replace(directory / "summary.json")
+
+
+def _finite_or_null(value: object) -> object:
+    """``value`` with every non-finite float replaced by None (null: strict JSON has no
+    Infinity or NaN; e.g. a rigid run's contact_duration, which no soft contact bounds)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite_or_null(v) for v in value]
+    return value
