@@ -1,5 +1,6 @@
 """Run tables: CSV tables that stay readable when a run stops midway (the header is written
-first and every block of rows is flushed to disk as soon as it is written), and, for large runs,
+first, every block of rows goes to the file in one write as soon as it is made, and a write that
+fails, as on a full disk, is cut back so that the file ends on a whole row), and, for large runs,
 the granule table as Parquet (:class:`ParquetTable`); :func:`read_columns` reads either.
 
 Rows of Python values go through the ``csv`` module (floats as ``repr``); a block given as
@@ -11,6 +12,8 @@ float64 (Arrow writes ``1`` and ``0.00001`` where ``repr`` writes ``1.0`` and ``
 from __future__ import annotations
 
 import csv
+import io
+import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import TracebackType
@@ -20,6 +23,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
+
+from perga.output.files import write_all
 
 _NO_HEADER = pacsv.WriteOptions(include_header=False, eol="\r\n")  # the csv module's line end
 
@@ -43,19 +48,23 @@ class _Closable:
 
 
 class Table(_Closable):
-    """One CSV file with a fixed header; rows are written and flushed in blocks."""
+    """One CSV file with a fixed header; rows are appended in blocks, each block whole or not at
+    all: it goes to the file in one unbuffered write, and a write that fails (a full disk, a
+    file-size limit) cuts the file back to the end of the last whole block before the error is
+    raised, so the file always ends on a whole row."""
 
     def __init__(self, path: Path, columns: Sequence[str]) -> None:
         self.path = path
         self.columns = tuple(columns)
-        self._file = path.open("w", newline="", encoding="utf-8")
-        self._writer = csv.writer(self._file)
-        self._writer.writerow(self.columns)
-        self._file.flush()
+        self._fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+        self._size = 0
+        """Bytes of whole blocks in the file."""
         self.rows = 0
+        self._append(_csv_lines([self.columns]))
 
     def write(self, rows: Iterable[Sequence[object]]) -> None:
-        """Append rows (each as long as the header) and flush them to disk."""
+        """Append rows (each as long as the header)."""
+        block = []
         for row in rows:
             if len(row) != len(self.columns):
                 raise ValueError(
@@ -63,26 +72,46 @@ class Table(_Closable):
                 )
             # repr of a Python float round-trips; numpy scalars (float subclasses) would write
             # "np.float64(...)"
-            self._writer.writerow([repr(float(v)) if isinstance(v, float) else v for v in row])
-            self.rows += 1
-        self._file.flush()
+            block.append([repr(float(v)) if isinstance(v, float) else v for v in row])
+        if block:
+            self._append(_csv_lines(block))
+            self.rows += len(block)
 
     def write_columns(self, columns: Sequence[np.ndarray]) -> None:
-        """Append a block given as one array per column (all of one length) and flush it."""
+        """Append a block given as one array per column (all of one length)."""
         if len(columns) != len(self.columns):
             raise ValueError(
                 f"{self.path.name}: {len(columns)} columns given, header has {len(self.columns)}"
             )
         block = pa.table([pa.array(np.asarray(c)) for c in columns], names=list(self.columns))
-        self._file.flush()  # the text layer's rows first, then the block's bytes after them
-        pacsv.write_csv(block, self._file.buffer, _NO_HEADER)
+        text = pa.BufferOutputStream()
+        pacsv.write_csv(block, text, _NO_HEADER)
+        self._append(text.getvalue().to_pybytes())
         self.rows += block.num_rows
-        self._file.buffer.flush()
+
+    def _append(self, data: bytes) -> None:
+        """Write ``data`` at the end of the file, whole, or cut the file back and raise."""
+        if self._fd is None:
+            raise ValueError(f"{self.path.name} is closed")
+        try:
+            write_all(self._fd, data)
+        except OSError:
+            os.ftruncate(self._fd, self._size)
+            raise
+        self._size += len(data)
 
     def close(self) -> None:
         """Close the file (idempotent)."""
-        if not self._file.closed:
-            self._file.close()
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+
+def _csv_lines(rows: Iterable[Sequence[object]]) -> bytes:
+    """``rows`` as CSV text (the csv module's quoting and line ends), UTF-8."""
+    text = io.StringIO()
+    csv.writer(text).writerows(rows)
+    return text.getvalue().encode("utf-8")
 
 
 PART_ROWS = 1 << 20

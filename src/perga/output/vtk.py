@@ -125,7 +125,13 @@ class PvdSeries:
             os.write(self._fd, head + entry + _PVD_END.encode("utf-8"))
             self._end = len(head) + len(entry)
             return
-        os.pwrite(self._fd, entry + _PVD_END.encode("utf-8"), self._end)
+        try:
+            os.pwrite(self._fd, entry + _PVD_END.encode("utf-8"), self._end)
+        except OSError:  # the index as it was: its closing tags back, nothing after them
+            end = _PVD_END.encode("utf-8")
+            os.pwrite(self._fd, end, self._end)
+            os.ftruncate(self._fd, self._end + len(end))
+            raise
         self._end += len(entry)
 
     def close(self) -> None:

@@ -27,7 +27,10 @@ from vtkmodules.vtkCommonDataModel import (
     vtkDataSetAttributes,
     vtkUnstructuredGrid,
 )
+from vtkmodules.vtkCommonMisc import vtkErrorCode
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+
+from perga.output.files import write_new
 
 VERTEX, POLY_LINE, POLYGON, TRIANGLE = VTK_VERTEX, VTK_POLY_LINE, VTK_POLYGON, VTK_TRIANGLE
 """The cell types perga writes."""
@@ -75,15 +78,24 @@ def vertices(
 
 
 def save(mesh: vtkUnstructuredGrid, path: Path) -> None:
-    """Write ``mesh`` to ``path`` (.vtu): binary, zlib at ``ZLIB_LEVEL``, inline."""
+    """Write ``mesh`` to ``path`` (.vtu): binary, zlib at ``ZLIB_LEVEL``, inline. VTK writes
+    the file into memory and perga writes it to disk whole (:func:`~perga.output.files.
+    write_new`): VTK's own file writing crashed the process (a segmentation fault, a corrupted
+    heap) when a disk filled up in the middle of a file, and took 1.2 ms a 300-granule frame
+    against 0.3 ms into memory. A failed write leaves no file and raises OSError."""
     writer = vtkXMLUnstructuredGridWriter()
-    writer.SetFileName(str(path))
     writer.SetInputData(mesh)
     writer.SetDataModeToBinary()
     writer.SetCompressorTypeToZLib()
     writer.SetCompressionLevel(ZLIB_LEVEL)
-    if writer.Write() != 1:
-        raise OSError(f"VTK could not write {path}")
+    writer.WriteToOutputStringOn()
+    errors: list[str] = []
+    for source in (writer, writer.GetExecutive()):
+        source.AddObserver("ErrorEvent", lambda _obj, _event: errors.append("VTK error"))
+    if writer.Write() != 1 or errors:
+        code = writer.GetErrorCode()
+        raise OSError(f"VTK could not make {path}: {vtkErrorCode.GetStringFromErrorCode(code)}")
+    write_new(Path(path), writer.GetOutputString().encode("utf-8"))
 
 
 def _ids(values: ArrayLike) -> object:
