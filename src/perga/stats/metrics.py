@@ -156,6 +156,8 @@ def ledger_closure(run: Run, _: float | None = None) -> float:
     energy = run.summary.get("energy") or {}
     if "closure" not in energy:
         raise MetricUnavailableError("the run did not track energy (output.record lacks 'energy')")
+    if energy["closure"] is None:  # summary.json writes a non-finite closure as null
+        raise MetricUnavailableError("the ledger's closure is not finite (no energy in play)")
     return float(energy["closure"])
 
 
