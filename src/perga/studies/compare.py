@@ -79,14 +79,42 @@ class Row:
         return asdict(self) | {"error": self.error, "agrees": self.agrees}
 
 
+@dataclass(frozen=True)
+class Unavailable:
+    """A statistic that could not be computed for a run, and why."""
+
+    run: str
+    statistic: str
+    reason: str
+
+
 @dataclass
 class Analysis:
-    """The rows of one run (or sweep) and the series its figures draw (SI units)."""
+    """The rows of one run (or sweep), the statistics it could not give (:class:`Unavailable`)
+    and the series its figures draw (SI units)."""
 
     name: str
     kind: str
     rows: list[Row] = field(default_factory=list)
     series: dict[str, object] = field(default_factory=dict)
+    unavailable: list[Unavailable] = field(default_factory=list)
+
+    def cannot(self, run: Run, statistic: str, reason: str) -> None:
+        """Record that ``statistic`` of ``run`` could not be computed, and why."""
+        self.unavailable.append(Unavailable(run.name, statistic, reason))
+
+
+def missing_impacts(run: Run, needed: int = 1) -> str | None:
+    """Why ``run`` has fewer than ``needed`` granule-hammer impacts, or None if it has them."""
+    if not run.impacts:
+        return "the run did not record impacts (output.record lacks 'impacts')"
+    n = run.impacts["time"].size
+    if n >= needed:
+        return None
+    simulated = run.summary.get("simulated_time") or 0.0
+    return (
+        f"{n} granule-hammer impacts completed in the run's {simulated:.3g} s; this needs {needed}"
+    )
 
 
 # --- recognising a run -----------------------------------------------------------------------
@@ -241,6 +269,14 @@ def analyse_blade(runs: Sequence[Run], paper: Params | None = None) -> Analysis:
         f = run.case.granule_hammer_contact.friction
         if math.isnan(v_sim) and math.isnan(v_model):
             continue  # both stop on the blade: floor friction beats the centrifugal force
+        if math.isnan(v_sim) and run.track(0)["time"][-1] < blade_model_exit(run)[0]:
+            a.cannot(
+                run,
+                "exit speed at the blade tip",
+                f"the run ends at {run.track(0)['time'][-1]:.3g} s, before the model's granule "
+                f"leaves the blade ({blade_model_exit(run)[0]:.3g} s): run it longer",
+            )
+            continue
         v_paper = math.nan if paper is None else vmax_decaying(paper, run.omega, f)
         points.append((run.omega, f, v_sim, v_model, v_paper))
         a.rows.append(
@@ -287,6 +323,9 @@ def analyse_two_body(runs: Sequence[Run], paper: Params | None = None) -> Analys
     a = Analysis("two-body sweep", "two-body")
     points = []
     for run in runs:
+        if reason := missing_impacts(run):
+            a.cannot(run, "efficiencies of the first impact", reason)
+            continue
         p = efficiency_point(run)
         model = impact_efficiencies(p.granule_mass, p.hammer_mass, p.restitution)
         points.append((p.hammer_mass, p.granule_mass, p.transfer, model.transfer))
@@ -352,6 +391,13 @@ def _flight_rows(run: Run, a: Analysis, paper_label: str) -> None:
     near_wall = np.nonzero(r[start:] + case.granules.radius >= case.chamber.radius - 1e-3)[0]
     if near_wall.size:
         ends.append(start + int(near_wall[0]))
+    # any collision between frames (the wall between two frames, an impact not finished when
+    # the run ended): a change of speed beyond the floor's f g Δt
+    speed = np.hypot(track["vx"][start:], track["vy"][start:])
+    floor_change = floor.friction * case.gravity * np.diff(t[start:])
+    jumps = np.nonzero(np.abs(np.diff(speed)) > 2.0 * floor_change + 1e-9)[0]
+    if jumps.size:
+        ends.append(start + int(jumps[0]) + 1)
     stop = min(ends)
     if stop - start < 5:
         return
@@ -438,10 +484,16 @@ def analyse_hinged(run: Run) -> Analysis:
                 "same physics: ½μv_n² keeps e² in every impact",
             )
         )
-    if case.hammers.shape.kind == "plate" and stats:
+    if reason := missing_impacts(run):
+        a.cannot(run, "restitution, losses and energy transfer of the impacts", reason)
+        a.cannot(run, "the granule's flight after its first impact", reason)
+        return a
+    if case.hammers.shape.kind == "plate":
         _hinged_rows(run, a, stats)
     _flight_rows(run, a, "realistic ω, f; x0 = r − R at the impact")
-    if len(stats) >= 2:
+    if reason := missing_impacts(run, 2):
+        a.cannot(run, "energies after successive impacts", reason)
+    else:
         _successive_rows(run, a)
     return a
 
@@ -533,6 +585,8 @@ def analyse_other(run: Run) -> Analysis:
     a = Analysis(run.name, "other")
     stats = all_impacts(run)
     a.series["impacts"] = stats
+    if reason := missing_impacts(run):
+        a.cannot(run, "restitution of the granule-hammer impacts", reason)
     if stats:
         e = run.case.granule_hammer_contact.restitution
         restitution = np.array([s.restitution for s in stats])

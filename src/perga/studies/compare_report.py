@@ -11,17 +11,22 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
 from perga.output.figures import new_figure, save
-from perga.studies.compare import Analysis, Row
+from perga.studies.compare import Analysis, Row, Unavailable
 from perga.studies.paper_check import Params
 
 Figure = Callable[[list[Analysis], Params | None, Path], bool]
 FIGURES: dict[str, tuple[str, Figure]] = {}
+
+
+class NotDrawn(Exception):  # noqa: N818 (not an error: a figure the runs cannot give, and why)
+    """A figure whose runs are there but cannot give it; the message says why."""
 
 
 def figure(key: str, title: str) -> Callable[[Figure], Figure]:
@@ -84,6 +89,11 @@ def fig3(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
         return False
     pts = blade[0].series["points"]
     omegas, fs = np.unique(pts[:, 0]), np.unique(pts[:, 1])
+    if omegas.size < 2 or fs.size < 2:
+        raise NotDrawn(
+            f"a map over ω and f needs blade runs at 2 or more of each (these give {omegas.size} "
+            f"ω × {fs.size} f); `perga compare --paper` runs the grid"
+        )
     grids = {}
     for col, label in ((2, "simulated"), (3, "BladeSlide (consistent)"), (4, "paper eq. (40)")):
         grid = np.full((fs.size, omegas.size), np.nan)
@@ -106,7 +116,7 @@ def fig3(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
 
 @figure("4a", "Fig. 4a: efficiency against hammer mass")
 def fig4a(analyses: list[Analysis], paper: Params | None, path: Path) -> bool:
-    two_body = _of(analyses, "two-body")
+    two_body = [a for a in _of(analyses, "two-body") if len(a.series["points"])]
     hinged = [a for a in analyses if a.kind == "hinged" and a.name.startswith("hinged-M")]
     if not two_body and not hinged:
         return False
@@ -236,10 +246,14 @@ def write_report(
     figures_dir.mkdir(parents=True, exist_ok=True)
     rows = [r for a in analyses for r in a.rows]
     written = {}
+    unavailable = [u for a in analyses for u in a.unavailable]
     for key, (title, fn) in FIGURES.items():
         path = figures_dir / f"fig{key}.png"
-        if fn(analyses, paper, path):
-            written[key] = (title, path)
+        try:
+            if fn(analyses, paper, path):
+                written[key] = (title, path)
+        except NotDrawn as reason:
+            unavailable.append(Unavailable("(all runs)", title, str(reason)))
     agree = [r for r in rows if r.tolerance is not None]
     differ = [r for r in rows if r.tolerance is None]
     worst = max((abs(r.error) for r in agree), default=math.nan)
@@ -250,7 +264,8 @@ def write_report(
         "",
         f"{len(analyses)} analyses, {len(rows)} rows: {sum(bool(r.agrees) for r in agree)} of "
         f"{len(agree)} rows agree where the physics is the same (largest |error| "
-        f"{worst:.2e}, tolerance 1 %); {len(differ)} rows compare regimes that differ.",
+        f"{worst:.2e}, tolerance 1 %); {len(differ)} rows compare regimes that differ; "
+        f"{len(unavailable)} statistics could not be computed (the last section says why).",
         "",
     ]
     for key, (title, path) in written.items():
@@ -260,13 +275,18 @@ def write_report(
             lines.append(_table(section))
     lines += ["## Agreement where the physics is the same", "", _table(agree)]
     lines += ["## Regimes that cannot match, and by how much", "", _table(differ)]
+    if unavailable:
+        lines += ["## Not computed, and why", "", "| run | statistic | reason |", "|---|---|---|"]
+        lines += [f"| {u.run} | {u.statistic} | {u.reason} |" for u in unavailable]
+        lines.append("")
     (out / "report.md").write_text("\n".join(lines), encoding="utf-8")
     data = {
         "command": command,
         "figures": {k: str(p.relative_to(out)) for k, (_, p) in written.items()},
         "analyses": [{"name": a.name, "kind": a.kind} for a in analyses],
         "rows": [r.as_dict() for r in rows],
-        "largest_agreement_error": worst,
+        "unavailable": [asdict(u) for u in unavailable],
+        "largest_agreement_error": worst if agree else None,
     }
     (out / "report.json").write_text(json.dumps(data, indent=2, default=float) + "\n")
     return data
