@@ -109,6 +109,11 @@ def _run(args: argparse.Namespace) -> int:
 
         case = load_case(args.case, overrides=args.set or ())
         stop.check()
+    if case.chamber is None:  # a parameter set (for paper-check), not a scene
+        return _problems(
+            [f"{args.case}: [chamber] is missing: perga run needs the wall around the rotor "
+             "(a case without one is a parameter set for perga paper-check)"]
+        )  # fmt: skip
     directory = args.output or Path(case.output.directory.format(case=args.case.stem))
     try:
         prepare_directory(directory, args.overwrite)
@@ -211,10 +216,14 @@ def _compare(args: argparse.Namespace) -> int:
     data = write_report(analyses, out, Params.from_case(load_case(fitted)), command)
     rows = [r for r in data["rows"] if r["tolerance"] is not None]
     failed = sum(not r["agrees"] for r in rows)
+    worst = data["largest_agreement_error"]
+    largest = f", largest error {worst:.2e}" if worst is not None else ""
     print(
         f"wrote {out}/report.md ({len(data['figures'])} figures): {len(rows) - failed} of "
-        f"{len(rows)} agreement rows within 1 %, largest error "
-        f"{data['largest_agreement_error']:.2e}; {time.perf_counter() - start:.1f} s"
+        f"{len(rows)} agreement rows within 1 %{largest}; "
+        f"{len(data['rows']) - len(rows)} rows compare regimes that differ; "
+        f"{len(data['unavailable'])} statistics not computed (report.md says why); "
+        f"{time.perf_counter() - start:.1f} s"
     )
     return 1 if failed else 0
 
