@@ -18,7 +18,7 @@ from pydantic import BaseModel, ValidationError
 
 from perga.case.checks import check_case
 from perga.case.overrides import OverrideError, apply_overrides, split_override
-from perga.case.schema import Case
+from perga.case.schema import NOT_A_NUMBER, Case
 
 
 class CaseError(Exception):
@@ -73,6 +73,9 @@ def _resolve(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | N
 
 
 def _describe(error: dict[str, Any]) -> str:
+    if error["type"] == NOT_A_NUMBER:  # raised for its table: the key and value are in ctx
+        ctx = error["ctx"]
+        error = error | {"loc": (*error["loc"], ctx["field"]), "input": ctx["value"]}
     loc, owner = _resolve(tuple(error["loc"]))
     key = ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in loc).replace(".[", "[")
     if error["type"] == "extra_forbidden":

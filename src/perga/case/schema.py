@@ -8,17 +8,72 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args, get_origin
 
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
 
 from perga.analytic.hammer import PlateHammer
 
 
 class Strict(BaseModel):
-    """Base of every case-file table: unknown keys are errors, values are immutable."""
+    """Base of every case-file table: unknown keys are errors, values are immutable, and a number
+    is a number: a string ("1500") or a boolean where only numbers are allowed is an error, not
+    converted (pydantic's lax mode would take both)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _numbers_are_numbers(cls, data: object) -> object:
+        if isinstance(data, dict):
+            for name, field in cls.model_fields.items():
+                value = data.get(name)
+                annotation = field.annotation
+                if _mentions_number(annotation) and _has_text_or_bool(
+                    value, _admits_text(annotation)
+                ):
+                    raise PydanticCustomError(
+                        NOT_A_NUMBER,
+                        "must be a number (numbers in a list), written without quotes",
+                        {"field": name, "value": value},
+                    )
+        return data
+
+
+NOT_A_NUMBER = "not_a_number"
+"""The error type of a string or boolean given for a number (its key and value in ``ctx``)."""
+
+
+def _mentions_number(annotation: object) -> bool:
+    """Whether a field's type allows a number anywhere (float, int, in a union or container)."""
+    if annotation in (float, int):
+        return True
+    return any(_mentions_number(a) for a in get_args(annotation))
+
+
+def _admits_text(annotation: object) -> bool:
+    """Whether a field's type allows a string anywhere (str, a Literal of strings)."""
+    if annotation is str:
+        return True
+    if get_origin(annotation) is Literal:
+        return any(isinstance(a, str) for a in get_args(annotation))
+    return any(_admits_text(a) for a in get_args(annotation))
+
+
+def _has_text_or_bool(value: object, text_allowed: bool) -> bool:
+    """Whether ``value`` is, or holds (in lists and tuples), a bool or a disallowed string."""
+    if isinstance(value, bool) or (isinstance(value, str) and not text_allowed):
+        return True
+    if isinstance(value, list | tuple):
+        return any(_has_text_or_bool(v, text_allowed) for v in value)
+    return False
 
 
 class PartFile(Strict):
