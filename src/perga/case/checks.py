@@ -141,8 +141,13 @@ def _parts(case: Case) -> list[str]:
 
 def _granules(case: Case) -> list[str]:
     g, placement = case.granules, case.granules.placement
-    if placement is None or case.chamber is None:
-        return []
+    if case.chamber is None:
+        return []  # a parameter set (perga paper-check), not a scene
+    if placement is None:
+        return [
+            "granules.placement: missing: a scene (a case with a [chamber]) needs the granules' "
+            "start positions (kind = 'explicit', 'ring', 'random', 'comb' or 'shot')"
+        ]
     problems = []
     wall = chamber_geometry(case)
     assert wall is not None

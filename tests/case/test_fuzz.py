@@ -1,0 +1,106 @@
+"""Case files mutated as a careless user or an adversary would (issue 15, item 1): every mutant
+of a bundled case either loads, or is refused with :class:`~perga.case.CaseError` (exit 2 in
+the CLI, the file and the key named); never another exception, never a hang. Seeded
+(``derandomize``), a few hundred mutants in the default suite; the mapping to the system
+(``scene_spec``) is checked too for mutants that load, since ``perga run`` does that next."""
+
+from __future__ import annotations
+
+import math
+import time
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from perga.case import CaseError, load_case
+from perga.model.from_case import scene_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+BUNDLED = {p.name: tomllib.loads(p.read_text()) for p in sorted((ROOT / "cases").glob("*.toml"))}
+SECONDS = 10.0
+"""Longest a mutant may take to load and map (the slowest bundled case takes about 1 s)."""
+
+ODD_VALUES = st.sampled_from(
+    [
+        math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 5e-324, 1e-300, 1e300, 10**30, -(10**30),
+        0, 1, True, False, "", "1500", "auto", "∞", "\x00", "x" * 10_000, [], [1.0], [[]],
+        {}, {"kind": "nope"}, [[0.0, 0.0]] * 3,
+    ]
+)  # fmt: skip
+
+
+def leaves(data: Any, path: tuple = ()) -> list[tuple]:
+    """Paths to every value in nested dicts and lists (tables and arrays included)."""
+    out = [path] if path else []
+    if isinstance(data, dict):
+        for key, value in data.items():
+            out += leaves(value, (*path, key))
+    elif isinstance(data, list):
+        for i, value in enumerate(data):
+            out += leaves(value, (*path, i))
+    return out
+
+
+def mutated(data: dict, path: tuple, action: str, value: Any) -> dict:
+    """A deep copy of ``data`` with the value at ``path`` deleted or replaced by ``value``."""
+    copy = tomllib.loads(tomli_w.dumps(data))
+    parent = copy
+    for key in path[:-1]:
+        parent = parent[key]
+    if action == "delete":
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = value
+    return copy
+
+
+@st.composite
+def mutants(draw: st.DrawFn) -> tuple[str, str]:
+    """(name, TOML text) of a bundled case with one to three values deleted or replaced."""
+    name = draw(st.sampled_from(sorted(BUNDLED)))
+    data = BUNDLED[name]
+    for _ in range(draw(st.integers(1, 3))):
+        paths = leaves(data)
+        if not paths:
+            break
+        path = draw(st.sampled_from(paths))
+        action = draw(st.sampled_from(["delete", "replace"]))
+        data = mutated(data, path, action, draw(ODD_VALUES))
+    return name, tomli_w.dumps(data)
+
+
+@settings(
+    max_examples=300,
+    derandomize=True,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(mutant=mutants())
+def test_a_mutated_case_loads_or_is_refused_with_its_problems(mutant, tmp_path_factory):
+    name, text = mutant
+    path = tmp_path_factory.mktemp("fuzz") / name
+    path.write_text(text, encoding="utf-8")
+    start = time.monotonic()
+    try:
+        case = load_case(path)
+    except CaseError as exc:
+        assert exc.problems and all(p.startswith(f"{path}: ") for p in exc.problems)
+    else:
+        if case.chamber is not None:
+            scene_spec(case)
+    assert time.monotonic() - start < SECONDS
+
+
+@settings(max_examples=50, derandomize=True, deadline=None)
+@given(garbage=st.binary(max_size=2000))
+def test_bytes_that_are_no_case_file_are_refused(garbage, tmp_path_factory):
+    path = tmp_path_factory.mktemp("fuzz") / "garbage.toml"
+    path.write_bytes(garbage)
+    try:
+        load_case(path)
+    except CaseError as exc:
+        assert all(p.startswith(f"{path}: ") for p in exc.problems)
