@@ -56,7 +56,7 @@ def test_the_file_is_not_changed_and_data_is_copied() -> None:
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ("rotor.rpm=0", "rotor.rpm: Input should be greater than 0"),
+        ("rotor.rpm=0", "rotor.rpm: Input should be greater than or equal to 0.00001 (got 0)"),
         ("rotor.rpm=20001", "rotor.rpm: Input should be less than or equal to 20000"),
         ("rotor.rpmm=3", "rotor.rpmm: unknown key; did you mean 'rpm'?"),
         ("contacts.granule-wall.friction=1", "no [[contacts]] entry for the pair beebread-wall"),
@@ -111,4 +111,4 @@ def test_a_run_records_its_overrides(tmp_path: Path, capsys) -> None:
 
     assert evaluate(load_run(out), "first_impact_restitution") == pytest.approx(0.55, abs=1e-12)
     assert main(["run", str(REBOUND), "-o", str(tmp_path / "bad"), "--set", "rotor.rpm=-1"]) == 2
-    assert "rotor.rpm: Input should be greater than 0" in capsys.readouterr().err
+    assert "rotor.rpm: Input should be greater than or equal to 0.00001" in capsys.readouterr().err

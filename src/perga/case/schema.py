@@ -94,13 +94,13 @@ class Rotor(Strict):
         "on the floor) or 'vertical' (gravity acts in the plane)",
     )
     omega: float | None = Field(
-        None, gt=0, le=2000, description="angular velocity, rad/s, in (0, 2000]; or give rpm"
+        None, ge=1e-6, le=2000, description="angular velocity, rad/s, in [1e-6, 2000]; or give rpm"
     )
     rpm: float | None = Field(
-        None, gt=0, le=20000, description="angular velocity, rev/min, in (0, 20000]; or omega"
+        None, ge=1e-5, le=20000, description="angular velocity, rev/min, in [1e-5, 20000]; or omega"
     )
     radius: float = Field(
-        0.15, gt=0, le=5, description="rotor disc radius, m, in (0, 5]; omit with a shape"
+        0.15, ge=1e-3, le=5, description="rotor disc radius, m, in [1e-3, 5]; omit with a shape"
     )
     shape: PartFile | None = Field(
         None,
@@ -109,12 +109,12 @@ class Rotor(Strict):
     )
     inertia: float | None = Field(
         None,
-        gt=0,
-        description="moment of inertia about the axis, kg·m², > 0; omit for a rotor held at "
+        ge=1e-9,
+        description="moment of inertia about the axis, kg·m², >= 1e-9; omit for a rotor held at "
         "constant ω (needs the rotor_inertia effect)",
     )
     torque_limit: float | None = Field(
-        None, gt=0, description="drive torque limit, N·m, > 0 (with inertia)"
+        None, ge=1e-6, description="drive torque limit, N·m, >= 1e-6 (with inertia)"
     )
 
     @model_validator(mode="after")
@@ -135,15 +135,17 @@ class PlateShape(Strict):
     """[hammers.shape] with kind = "plate": a rectangular plate hinged on its axis."""
 
     kind: Literal["plate"] = "plate"
-    length: float = Field(gt=0, le=2, description="length along the hammer axis, m, in (0, 2]")
-    width: float = Field(gt=0, le=1, description="width across the axis, m, in (0, 1]")
+    length: float = Field(
+        ge=1e-3, le=2, description="length along the hammer axis, m, in [1e-3, 2]"
+    )
+    width: float = Field(ge=1e-4, le=1, description="width across the axis, m, in [1e-4, 1]")
     hinge_offset: float = Field(
         0.0, ge=0, description="distance from the inner end to the hinge, m, in [0, length/2)"
     )
     strike_distance: float | None = Field(
         None,
-        gt=0,
-        description="distance a from the hinge to the striking point K, m, in (0, length − "
+        ge=1e-4,
+        description="distance a from the hinge to the striking point K, m, in [1e-4, length − "
         "hinge_offset]; default: the centre of percussion clipped to the plate",
     )
 
@@ -163,9 +165,9 @@ class FileShape(Strict):
     units: Literal["m", "cm", "mm"] = Field("mm", description="length unit of the file")
     thickness: float | None = Field(
         None,
-        gt=0,
+        ge=1e-4,
         le=1,
-        description="out-of-plane thickness, m, in (0, 1]: outlines only (meshes have their own)",
+        description="out-of-plane thickness, m, in [1e-4, 1]: outlines only (meshes: their own)",
     )
     height: float | None = Field(
         None,
@@ -183,9 +185,9 @@ class Hammers(Strict):
     count: int = Field(4, ge=1, le=64, description="number of hammers, in [1, 64]")
     mass: float | None = Field(
         None,
-        gt=0,
+        ge=1e-6,
         le=50,
-        description="mass of one hammer, kg, in (0, 50]: plates; a file shape's mass follows "
+        description="mass of one hammer, kg, in [1e-6, 50]: plates; a file shape's mass follows "
         "from its geometry and material density",
     )
     hinge_radius: float = Field(
@@ -205,9 +207,9 @@ class Hammers(Strict):
     )
     swing_limit: float | None = Field(
         None,
-        gt=0,
+        ge=1e-3,
         le=3.1416,
-        description="stops of a hinged hammer: |α| <= swing_limit, rad, in (0, π]; default: "
+        description="stops of a hinged hammer: |α| <= swing_limit, rad, in [1e-3, π]; default: "
         "free to swing all round",
     )
     velocity: tuple[float, float] = Field(
@@ -260,7 +262,7 @@ class RingPlacement(Strict):
     """[granules.placement] kind = "ring": evenly spaced on a circle about the axis."""
 
     kind: Literal["ring"]
-    radius: float = Field(gt=0, le=5, description="ring radius, m, in (0, 5]")
+    radius: float = Field(ge=1e-4, le=5, description="ring radius, m, in [1e-4, 5]")
     phase: float = Field(0.0, description="angle of the first granule, rad")
 
 
@@ -269,7 +271,7 @@ class RandomPlacement(Strict):
 
     kind: Literal["random"]
     inner_radius: float = Field(ge=0, le=5, description="inner radius of the annulus, m")
-    outer_radius: float = Field(gt=0, le=5, description="outer radius of the annulus, m")
+    outer_radius: float = Field(ge=1e-4, le=5, description="outer radius of the annulus, m")
     seed: int | None = Field(
         None, ge=0, description="seed of the random pack, >= 0; default: solver.seed"
     )
@@ -283,7 +285,9 @@ class ShotPlacement(Strict):
     component points outward along the hammer's axis."""
 
     kind: Literal["shot"]
-    speed: float = Field(gt=0, le=200, description="speed relative to the face, m/s, in (0, 200]")
+    speed: float = Field(
+        ge=1e-3, le=200, description="speed relative to the face, m/s, in [1e-3, 200]"
+    )
     angle: float = Field(
         0.0, ge=0, le=1.5, description="angle of incidence from the face's normal, rad, in [0, 1.5]"
     )
@@ -292,12 +296,12 @@ class ShotPlacement(Strict):
     )
     along: float | None = Field(
         None,
-        gt=0,
+        ge=1e-4,
         description="where the path meets the face, m from the hinge along the "
         "hammer's axis; default: the middle of the face",
     )
     gap: float = Field(
-        0.001, gt=0, le=0.1, description="distance the granule flies before it touches, m"
+        0.001, ge=1e-6, le=0.1, description="distance the granule flies before it touches, m"
     )
 
 
@@ -312,7 +316,7 @@ class CombPlacement(Strict):
     rows: int = Field(ge=1, le=1000, description="rows of cells, in [1, 1000]")
     columns: int = Field(ge=1, le=1000, description="cells per row, in [1, 1000]")
     pitch: float = Field(
-        gt=0,
+        ge=1e-5,
         le=0.05,
         description="distance between neighbouring cells' centres, m: a worker "
         "cell's width across flats plus its wall, 5.2-5.4 mm in bee comb",
@@ -336,12 +340,14 @@ class SizeDistribution(Strict):
 
     kind: Literal["uniform", "normal", "lognormal", "table"]
     basis: Literal["number", "mass"] = Field("number", description="fractions of number or mass")
-    low: float | None = Field(None, gt=0, le=0.05, description="smallest radius, m")
-    high: float | None = Field(None, gt=0, le=0.05, description="largest radius, m")
-    mean: float | None = Field(None, gt=0, le=0.05, description="normal: mean radius, m")
-    sd: float | None = Field(None, gt=0, le=0.05, description="normal: standard deviation, m")
-    median: float | None = Field(None, gt=0, le=0.05, description="lognormal: median radius, m")
-    sigma: float | None = Field(None, gt=0, le=3, description="lognormal: sd of ln r, in (0, 3]")
+    low: float | None = Field(None, ge=1e-5, le=0.05, description="smallest radius, m")
+    high: float | None = Field(None, ge=1e-5, le=0.05, description="largest radius, m")
+    mean: float | None = Field(None, ge=1e-5, le=0.05, description="normal: mean radius, m")
+    sd: float | None = Field(None, ge=1e-7, le=0.05, description="normal: standard deviation, m")
+    median: float | None = Field(None, ge=1e-5, le=0.05, description="lognormal: median radius, m")
+    sigma: float | None = Field(
+        None, ge=1e-4, le=3, description="lognormal: sd of ln r, in [1e-4, 3]"
+    )
     radii: list[float] | None = Field(None, min_length=1, description="table: radii, m")
     fractions: list[float] | None = Field(None, min_length=1, description="table: fractions")
 
@@ -383,22 +389,22 @@ class Granules(Strict):
 
     count: int = Field(1, ge=1, le=1_000_000, description="number of granules, in [1, 1e6]")
     radius: float = Field(
-        gt=0,
+        ge=1e-5,
         le=0.05,
-        description="disc radius, m, in (0, 0.05]; with size: the largest "
+        description="disc radius, m, in [1e-5, 0.05]; with size: the largest "
         "radius a time step and the checks plan for",
     )
     size: SizeDistribution | None = Field(
         None, description="radii from a distribution (needs thickness); default: all radius"
     )
     mass: float | None = Field(
-        None, gt=0, le=0.1, description="mass of one granule, kg, in (0, 0.1]; or thickness"
+        None, ge=1e-12, le=0.1, description="mass of one granule, kg, in [1e-12, 0.1]; or thickness"
     )
     thickness: float | None = Field(
         None,
-        gt=0,
+        ge=1e-5,
         le=0.1,
-        description="out-of-plane length of a granule, m, in (0, 0.1]: mass = density·πr²·"
+        description="out-of-plane length of a granule, m, in [1e-5, 0.1]: mass = density·πr²·"
         "thickness from its material; or give mass",
     )
     material: str = Field("beebread", description="name of a [materials] entry")
@@ -423,20 +429,20 @@ class Breakage(Strict):
     S = 1 − exp(−f_mat · x · k · (W − W_min)) for an impact of mass-specific energy W > W_min,
     x the granule's size (its diameter) and k impacts so far."""
 
-    f_mat: float = Field(gt=0, le=100, description="material strength parameter, kg/(J·m)")
+    f_mat: float = Field(ge=1e-6, le=100, description="material strength parameter, kg/(J·m)")
     w_min: float = Field(ge=0, le=1e4, description="threshold mass-specific energy, J/kg")
 
 
 class Material(Strict):
     """[materials.NAME]."""
 
-    density: float = Field(gt=0, le=30000, description="density, kg/m³, in (0, 30000]")
+    density: float = Field(ge=1, le=30000, description="density, kg/m³, in [1, 30000]")
     detachment_force: float | None = Field(
         None,
-        gt=0,
+        ge=1e-9,
         le=1e4,
         description="force that pulls a granule of this material out of its "
-        "comb cell, N, in (0, 1e4]; none: granules are not held",
+        "comb cell, N, in [1e-9, 1e4]; none: granules are not held",
     )
     breakage: Breakage | None = Field(None, description="breakage parameters (damage)")
 
@@ -452,14 +458,14 @@ class ContactPair(Strict):
 class PaperStudy(Strict):
     """[paper]: the inputs of ``perga paper-check`` that the paper states itself."""
 
-    x0: float = Field(0.08, gt=0, description="initial displacement after impact, m")
+    x0: float = Field(0.08, ge=1e-4, description="initial displacement after impact, m")
     decay_times: tuple[float, float] = Field(
         (0.02, 0.05), description="times of the quoted decays, s"
     )
     decay_fractions: tuple[float, float] = Field(
         (0.6, 0.8), description="quoted minimum fractional decreases of x at decay_times"
     )
-    final_radius: float = Field(0.02, gt=0, description="r must fall below this by t2, m")
+    final_radius: float = Field(0.02, ge=1e-4, description="r must fall below this by t2, m")
     efficiency_hammer_masses: tuple[float, float, float] = Field(
         (0.005, 0.1, 0.2), description="hammer masses of the quoted efficiencies, kg"
     )
@@ -483,13 +489,16 @@ class Chamber(Strict):
     its inner outline; a closed mesh gives its section's outline)."""
 
     radius: float | None = Field(
-        None, gt=0, le=5, description="inner radius of a round wall, m, in (0, 5]; or a shape"
+        None, ge=1e-3, le=5, description="inner radius of a round wall, m, in [1e-3, 5]; or a shape"
     )
     shape: PartFile | None = Field(
         None, description="the wall's inner outline from a geometry file; or a radius"
     )
     wall_thickness: float = Field(
-        0.01, gt=0, le=1, description="wall thickness, m, in (0, 1]; thick walls stop tunnelling"
+        0.01,
+        ge=1e-4,
+        le=1,
+        description="wall thickness, m, in [1e-4, 1]; thick walls stop tunnelling",
     )
     material: str = Field("steel", description="name of a [materials] entry")
 
@@ -512,8 +521,10 @@ class FloorFriction(Strict):
 class AirDrag(Strict):
     """[effects.air_drag]: quadratic drag F = ½ ρ C_d A v² on each granule."""
 
-    air_density: float = Field(1.204, gt=0, le=10, description="air density, kg/m³, in (0, 10]")
-    drag_coefficient: float = Field(0.47, gt=0, le=5, description="C_d, in (0, 5]")
+    air_density: float = Field(
+        1.204, ge=1e-3, le=10, description="air density, kg/m³, in [1e-3, 10]"
+    )
+    drag_coefficient: float = Field(0.47, ge=1e-3, le=5, description="C_d, in [1e-3, 5]")
 
 
 class NoParameters(Strict):
@@ -560,7 +571,7 @@ class Solver(Strict):
         "[1, 1000]; soft contacts: 1 (see contact_model.granule_substeps)",
     )
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
-    duration: float = Field(0.1, gt=0, le=3600, description="simulated time, s, in (0, 3600]")
+    duration: float = Field(0.1, ge=1e-6, le=3600, description="simulated time, s, in [1e-6, 3600]")
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
     threads: int | Literal["auto"] = Field(
         "auto",
@@ -592,15 +603,15 @@ class ContactModel(Strict):
     )
     duration: float | None = Field(
         None,
-        gt=0,
+        ge=1e-9,
         le=0.01,
         description="linear only: contact duration t_c of a granule striking a rigid wall "
-        "head-on with the granule-hammer restitution, s, in (0, 0.01]; sets k_n (or stiffness)",
+        "head-on with the granule-hammer restitution, s, in [1e-9, 0.01]; sets k_n (or stiffness)",
     )
     stiffness: float | None = Field(
         None,
-        gt=0,
-        description="normal stiffness k_n, > 0: N/m (linear; or duration) or (4/3)E*, Pa "
+        ge=1,
+        description="normal stiffness k_n, >= 1: N/m (linear; or duration) or (4/3)E*, Pa "
         "(hertz: the contact stiffness is k_n·√R_eff)",
     )
     tangential_ratio: float = Field(
@@ -645,7 +656,9 @@ class Output(Strict):
     """[output]: what to record and how often."""
 
     directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
-    every: float = Field(1e-3, gt=0, description="recording interval in simulated time, s, > 0")
+    every: float = Field(
+        1e-3, ge=1e-7, description="recording interval in simulated time, s, >= 1e-7"
+    )
     record: tuple[
         Literal["granules", "hammers", "impacts", "energy", "releases", "outflow", "vtk"], ...
     ] = Field(
@@ -698,10 +711,10 @@ class Feed(Strict):
     kind: Literal["granules", "comb"] = Field(
         "granules", description="free granules or comb pieces"
     )
-    rate: float = Field(gt=0, le=1e7, description="granules (or pieces) per s, or kg/s by mass")
+    rate: float = Field(ge=1e-6, le=1e7, description="granules (or pieces) per s, or kg/s by mass")
     basis: Literal["number", "mass"] = Field("number", description="rate of number or of mass")
     start: float = Field(0.0, ge=0, description="first insertion, s")
-    stop: float | None = Field(None, gt=0, description="no insertion after, s; default: never")
+    stop: float | None = Field(None, ge=1e-6, description="no insertion after, s; default: never")
     total: int | None = Field(None, ge=1, le=10_000_000, description="granules (pieces) in all")
     region: Region = Field(description="where they are put")
     velocity: tuple[float, float] = Field((0.0, 0.0), description="their velocity, m/s")
@@ -714,11 +727,11 @@ class Outlet(Strict):
     only by granules narrower than ``aperture``."""
 
     kind: Literal["radius", "line", "screen"]
-    radius: float | None = Field(None, gt=0, le=5, description="radius kind, m")
+    radius: float | None = Field(None, ge=1e-3, le=5, description="radius kind, m")
     point: tuple[float, float] | None = Field(None, description="line, screen: a point on it, m")
     normal: tuple[float, float] | None = Field(None, description="line, screen: outward normal")
-    width: float | None = Field(None, gt=0, le=10, description="screen: its width, m")
-    aperture: float | None = Field(None, gt=0, le=0.1, description="screen: mesh opening, m")
+    width: float | None = Field(None, ge=1e-4, le=10, description="screen: its width, m")
+    aperture: float | None = Field(None, ge=1e-5, le=0.1, description="screen: mesh opening, m")
 
     @model_validator(mode="after")
     def _parameters(self) -> Outlet:
