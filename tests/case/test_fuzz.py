@@ -1,8 +1,8 @@
 """Case files mutated as a careless user or an adversary would (issue 15, item 1): every mutant
 of a bundled case either loads, or is refused with :class:`~perga.case.CaseError` (exit 2 in
 the CLI, the file and the key named); never another exception, never a hang. Seeded
-(``derandomize``), a few hundred mutants in the default suite; the mapping to the system
-(``scene_spec``) is checked too for mutants that load, since ``perga run`` does that next."""
+(``derandomize``), a few hundred mutants in the default suite; a mutant that loads is also
+mapped to the system and built (``Simulation``), as ``perga run`` does next."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from perga.case import CaseError, load_case
+from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -27,6 +28,7 @@ SECONDS = 10.0
 ODD_VALUES = st.sampled_from(
     [
         math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 5e-324, 1e-300, 1e300, 10**30, -(10**30),
+        1e-12, 1e-9, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 0.5, 2.0,
         0, 1, True, False, "", "1500", "auto", "∞", "\x00", "x" * 10_000, [], [1.0], [[]],
         {}, {"kind": "nope"}, [[0.0, 0.0]] * 3,
     ]
@@ -91,7 +93,7 @@ def test_a_mutated_case_loads_or_is_refused_with_its_problems(mutant, tmp_path_f
         assert exc.problems and all(p.startswith(f"{path}: ") for p in exc.problems)
     else:
         if case.chamber is not None:
-            scene_spec(case)
+            Simulation(scene_spec(case))
     assert time.monotonic() - start < SECONDS
 
 

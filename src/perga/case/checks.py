@@ -23,7 +23,7 @@ from perga.case.parts import (
     hinge_positions,
     rotor_geometry,
 )
-from perga.case.placement import face, initial_state
+from perga.case.placement import PlacementError, face, initial_state
 from perga.case.schema import (
     Case,
     CombPlacement,
@@ -185,6 +185,11 @@ def _granules(case: Case) -> list[str]:
                     f"granules.count: {g.count} granules fill {fraction:.0%} of the annulus; a "
                     f"random pack needs <= {MAX_RANDOM_PACKING:.0%}: fewer granules or a wider ring"
                 )
+            else:  # the hammers may still leave too little room: try the pack itself
+                try:
+                    initial_state(case)
+                except PlacementError as exc:
+                    problems.append(f"granules.placement: {exc}")
         return problems
     if isinstance(placement, CombPlacement) and placement.pitch < 2 * radius_range(case)[1]:
         problems.append(
