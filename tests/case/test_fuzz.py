@@ -1,12 +1,14 @@
-"""Case files mutated as a careless user or an adversary would (issue 15, item 1): every mutant
-of a bundled case either loads, or is refused with :class:`~perga.case.CaseError` (exit 2 in
-the CLI, the file and the key named); never another exception, never a hang. Seeded
-(``derandomize``), a few hundred mutants in the default suite; a mutant that loads is also
-mapped to the system and built (``Simulation``), as ``perga run`` does next."""
+"""Case files and geometry files mutated as a careless user or an adversary would (issue 15,
+item 1): every mutant of a bundled case (or of a geometry file it names) either loads, or is
+refused with :class:`~perga.case.CaseError` (exit 2 in the CLI, the file and the key named);
+never another exception, never a hang. Seeded (``derandomize``), a few hundred mutants in the
+default suite; a mutant that loads is also mapped to the system and built (``Simulation``), as
+``perga run`` does next."""
 
 from __future__ import annotations
 
 import math
+import re
 import time
 import tomllib
 from pathlib import Path
@@ -106,3 +108,62 @@ def test_bytes_that_are_no_case_file_are_refused(garbage, tmp_path_factory):
         load_case(path)
     except CaseError as exc:
         assert all(p.startswith(f"{path}: ") for p in exc.problems)
+
+
+REFERENCES = [
+    (case.name, line.split('path = "')[1].split('"')[0])
+    for case in sorted((ROOT / "cases").glob("*.toml"))
+    for line in case.read_text().splitlines()
+    if 'kind = "file", path = "' in line
+]
+"""(case, relative geometry path) of every geometry file a bundled case refers to."""
+NUMBER = re.compile(rb"-?\d+(\.\d+)?([eE][-+]?\d+)?")
+
+
+@st.composite
+def broken_geometry(draw: st.DrawFn) -> tuple[str, str, bytes]:
+    """(case, the geometry path it names, the file's bytes broken): cut short, bytes
+    overwritten, or (text files) a number replaced by nan, inf, a huge, tiny or negative value
+    or a word."""
+    case, relative = draw(st.sampled_from(REFERENCES))
+    data = (ROOT / "cases" / relative).resolve().read_bytes()
+    how = draw(st.sampled_from(["cut", "overwrite", "number"]))
+    if how == "cut":
+        data = data[: draw(st.integers(0, len(data)))]
+    elif how == "overwrite":
+        at = draw(st.integers(0, max(len(data) - 1, 0)))
+        data = data[:at] + draw(st.binary(min_size=1, max_size=64)) + data[at + 64 :]
+    else:
+        numbers = list(NUMBER.finditer(data[:200_000]))
+        if numbers:
+            m = draw(st.sampled_from(numbers))
+            word = draw(st.sampled_from([b"nan", b"inf", b"1e300", b"1e-300", b"-5", b"0", b"x"]))
+            data = data[: m.start()] + word + data[m.end() :]
+    return case, relative, data
+
+
+@settings(
+    max_examples=150,
+    derandomize=True,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(broken=broken_geometry())
+def test_a_broken_geometry_file_loads_or_is_refused(broken, tmp_path_factory):
+    """A bundled case pointing at a broken copy of its geometry file loads (and builds) or is
+    refused with CaseError, never another exception."""
+    case, relative, data = broken
+    folder = tmp_path_factory.mktemp("geometry")
+    geometry = folder / Path(relative).name
+    geometry.write_bytes(data)
+    text = (ROOT / "cases" / case).read_text().replace(f'"{relative}"', f'"{geometry}"')
+    path = folder / case
+    path.write_text(text)
+    start = time.monotonic()
+    try:
+        loaded = load_case(path)
+    except CaseError as exc:
+        assert exc.problems
+    else:
+        Simulation(scene_spec(loaded))
+    assert time.monotonic() - start < SECONDS
