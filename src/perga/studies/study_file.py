@@ -137,9 +137,14 @@ def load_study(path: str | Path) -> Study:
         raise StudyError([f"{path}: {_describe(e)}" for e in exc.errors()]) from None
     study = study.model_copy(update={"case": (path.parent / study.case).resolve()})
     problems = check_metrics(study.metrics, f"{path}: metrics")
-    if not study.case.is_file():
+    try:
+        is_file = study.case.is_file()
+    except OSError as exc:  # a name the file system refuses (too long, ...)
+        problems.append(f"{path}: case: cannot use {str(study.case)[:80]}…: {exc.strerror}")
+        is_file = None
+    if is_file is False:
         problems.append(f"{path}: case: no such file {study.case}")
-    else:
+    elif is_file:
         first = {
             k: (p.values[0] if p.values is not None else p.range[0])  # type: ignore[index]
             for k, p in study.parameters.items()
