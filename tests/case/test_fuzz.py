@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
+from tests.value_paths import value_paths
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = {p.name: tomllib.loads(p.read_text()) for p in sorted((ROOT / "cases").glob("*.toml"))}
@@ -35,18 +36,6 @@ ODD_VALUES = st.sampled_from(
         {}, {"kind": "nope"}, [[0.0, 0.0]] * 3,
     ]
 )  # fmt: skip
-
-
-def leaves(data: Any, path: tuple = ()) -> list[tuple]:
-    """Paths to every value in nested dicts and lists (tables and arrays included)."""
-    out = [path] if path else []
-    if isinstance(data, dict):
-        for key, value in data.items():
-            out += leaves(value, (*path, key))
-    elif isinstance(data, list):
-        for i, value in enumerate(data):
-            out += leaves(value, (*path, i))
-    return out
 
 
 def mutated(data: dict, path: tuple, action: str, value: Any) -> dict:
@@ -68,7 +57,7 @@ def mutants(draw: st.DrawFn) -> tuple[str, str]:
     name = draw(st.sampled_from(sorted(BUNDLED)))
     data = BUNDLED[name]
     for _ in range(draw(st.integers(1, 3))):
-        paths = leaves(data)
+        paths = value_paths(data)
         if not paths:
             break
         path = draw(st.sampled_from(paths))

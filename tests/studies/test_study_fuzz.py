@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 
 from perga.studies.design import points
 from perga.studies.study_file import StudyError, load_study
+from tests.value_paths import value_paths
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = {
@@ -41,23 +42,11 @@ ODD = st.sampled_from(
 )  # fmt: skip
 
 
-def paths(data: object, path: tuple = ()) -> list[tuple]:
-    """Paths to every value of nested dicts and lists."""
-    out = [path] if path else []
-    if isinstance(data, dict):
-        for key, value in data.items():
-            out += paths(value, (*path, key))
-    elif isinstance(data, list):
-        for i, value in enumerate(data):
-            out += paths(value, (*path, i))
-    return out
-
-
 @st.composite
 def mutants(draw: st.DrawFn) -> dict:
     data = tomllib.loads(tomli_w.dumps(STUDY))
     for _ in range(draw(st.integers(1, 3))):
-        path = draw(st.sampled_from(paths(data)))
+        path = draw(st.sampled_from(value_paths(data)))
         parent = data
         for key in path[:-1]:
             parent = parent[key]

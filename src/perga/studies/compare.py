@@ -265,16 +265,17 @@ def analyse_blade(runs: Sequence[Run], paper: Params | None = None) -> Analysis:
     points = []
     for run in runs:
         _, v_sim = blade_exit(run)
-        _, v_model = blade_model_exit(run)
+        t_model, v_model = blade_model_exit(run)
         f = run.case.granule_hammer_contact.friction
         if math.isnan(v_sim) and math.isnan(v_model):
             continue  # both stop on the blade: floor friction beats the centrifugal force
-        if math.isnan(v_sim) and run.track(0)["time"][-1] < blade_model_exit(run)[0]:
+        end = float(run.track(0)["time"][-1])
+        if math.isnan(v_sim) and end < t_model:
             a.cannot(
                 run,
                 "exit speed at the blade tip",
-                f"the run ends at {run.track(0)['time'][-1]:.3g} s, before the model's granule "
-                f"leaves the blade ({blade_model_exit(run)[0]:.3g} s): run it longer",
+                f"the run ends at {end:.3g} s, before the model's granule leaves the blade "
+                f"({t_model:.3g} s): run it longer",
             )
             continue
         v_paper = math.nan if paper is None else vmax_decaying(paper, run.omega, f)
