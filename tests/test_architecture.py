@@ -22,9 +22,10 @@ ALLOWED: dict[str, set[str]] = {
     "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
                 "runner", "__init__"},
-    "runner": {"runner", "case", "model", "engine", "output", "stopping"},
+    "runner": {"runner", "case", "model", "engine", "output", "stopping", "checkpoints"},
+    "checkpoints": {"checkpoints", "engine", "output", "__init__"},
     "cli": {"cli", "__init__", "case", "analytic", "model", "studies", "output", "runner", "stats",
-            "stopping"},
+            "stopping", "checkpoints"},
     "stopping": set(),
     "__init__": set(),
 }  # fmt: skip
@@ -162,6 +163,12 @@ def test_no_isinstance_on_a_simulation_or_contact_model() -> None:
     assert bad == []
 
 
+RAW_C_POINTERS = {"perga.engine.chipmunk_state": {"_body", "_constraint"}}
+"""The one exception: the module that reads what pymunk's pickle misses through the bodies' and
+joints' C pointers, which pymunk offers no public way to reach (every read checked against
+pymunk's getters)."""
+
+
 def test_no_private_member_of_another_package_is_read() -> None:
     """``x._name`` only on ``self``/``cls``, or on an object of the module's own package."""
     bad = []
@@ -173,6 +180,7 @@ def test_no_private_member_of_another_package_is_read() -> None:
                 and node.attr.startswith("_")
                 and not node.attr.startswith("__")
                 and not (isinstance(node.value, ast.Name) and node.value.id in {"self", "cls"})
+                and node.attr not in RAW_C_POINTERS.get(module, set())
             ):
                 bad.append(f"{module}:{node.lineno}: {ast.unparse(node)}")
     assert bad == []

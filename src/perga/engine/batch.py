@@ -112,6 +112,23 @@ class BodyReader:
         if self._bodies:
             self._verify_layout()
 
+    def __getstate__(self) -> dict[str, object]:
+        """The space and the bodies (a checkpoint): the buffers are C memory, and a pickled
+        body gets a new id, so both are made anew on unpickling."""
+        return {"_space": self._space, "_bodies": self._bodies}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._buffer, self._write_buffer = pb.Buffer(), pb.Buffer()
+        self._rows = np.zeros(0, dtype=np.intp)
+        self._ids = np.zeros(0, dtype=np.uintp)  # the bodies may not be rebuilt yet: see _chosen
+
+    def _chosen(self) -> NDArray[np.uintp]:
+        """The chosen bodies' ids (taken again after unpickling, at the first read)."""
+        if self._ids.size != len(self._bodies):
+            self._ids = np.array([b.id for b in self._bodies], dtype=np.uintp)
+        return self._ids
+
     @property
     def count(self) -> int:
         """Number of bodies read."""
@@ -169,13 +186,13 @@ class BodyReader:
     ) -> None:
         """Copy the chosen bodies' rows of a fetch into ``out`` (one compiled call when the
         cached rows hold, the usual case)."""
-        if not _take_rows(floats, ids, self._rows, self._ids, centres, out):
+        if not _take_rows(floats, ids, self._rows, self._chosen(), centres, out):
             self._rows = self._locate(ids)
             _take_rows(floats, ids, self._rows, self._ids, centres, out)
 
     def _rows_of(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
         """The chosen bodies' rows in a batch read whose id column is ``ids`` (cached, checked)."""
-        if not _rows_hold(ids, self._rows, self._ids):
+        if not _rows_hold(ids, self._rows, self._chosen()):
             self._rows = self._locate(ids)
         return self._rows
 
@@ -200,14 +217,15 @@ class BodyReader:
 
     def _locate(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
         """Row of each chosen body in a batch read whose id column is ``ids``."""
+        chosen = self._chosen()
         if ids.size == 0:
-            missing = np.arange(self._ids.size)
+            missing = np.arange(chosen.size)
         else:
             order = np.argsort(ids, kind="stable")
-            where = np.searchsorted(ids[order], self._ids)
+            where = np.searchsorted(ids[order], chosen)
             where[where >= ids.size] = 0
             rows = order[where]
-            missing = np.flatnonzero(ids[rows] != self._ids)
+            missing = np.flatnonzero(ids[rows] != chosen)
         if missing.size:
             raise LookupError(
                 f"bodies {missing[:10].tolist()} (indices in the reader's list) are not in "

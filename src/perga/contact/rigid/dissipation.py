@@ -80,10 +80,14 @@ class ArbiterMeter:
 
     def __init__(self, machine: Machine) -> None:
         self._space = machine.space
-        rotor_driven = {machine.rotor, *(j.b for j in machine.hinges)}
-        self._machine_ids = np.array([b.id for b in rotor_driven], dtype=np.uintp)
+        self._rotor_driven = [machine.rotor, *(j.b for j in machine.hinges)]
         self.dissipated = 0.0
         """Energy the contacts dissipated since the meter was built, internal units."""
+        self._start_caches()
+
+    def _start_caches(self) -> None:
+        """The per-step values and the caches keyed by body ids (empty: filled at a step)."""
+        self._machine_ids = np.array([b.id for b in self._rotor_driven], dtype=np.uintp)
         self._moment = 0.0  # contact angular impulse on rotor-driven bodies this step
         self._arbiter_buffer = pb.Buffer()
         self._ids0: NDArray[np.uintp] = np.zeros(0, dtype=np.uintp)
@@ -93,9 +97,21 @@ class ArbiterMeter:
         self._order: NDArray[np.intp] = np.zeros(0, dtype=np.intp)
         self._cog_sorted: NDArray[np.float64] = np.zeros((0, 2))
 
+    def __getstate__(self) -> dict[str, object]:
+        """The meter's state (a checkpoint) without the arbiter buffer (C memory) and the
+        caches keyed by body ids, which a pickled body does not keep."""
+        return {k: self.__dict__[k] for k in ("_space", "_rotor_driven", "dissipated")}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._arbiter_buffer = pb.Buffer()
+        self._machine_ids = np.zeros(0, dtype=np.uintp)  # the bodies may not be rebuilt yet
+
     def before_step(self, state: MachineState) -> None:
         """Keep every body's velocity at the start of a step, from the machine's ``state``
         (its read of the whole space) taken immediately before ``space.step``."""
+        if self._machine_ids.size != len(self._rotor_driven):  # first step after unpickling
+            self._start_caches()
         self._ids0, self._table0 = state.space_ids, state.space
 
     def after_step(self, state: MachineState) -> float:

@@ -91,7 +91,7 @@ class SoftContacts:
         self.ids = np.arange(len(spec.granules), dtype=np.int64)
         self.log = (
             SoftImpactLog(
-                self.granules, self.polygons.hammer_of, machine.hammer_state, lambda: self.ids
+                self.granules, self.polygons.hammer_of, machine.hammer_state, self.present_ids
             )
             if record_impacts
             else None
@@ -119,6 +119,10 @@ class SoftContacts:
         """numba's thread count held at :attr:`threads` over a run (each kernel call then
         finds it set: setting and restoring it costs about 3.5 µs a step)."""
         return numba_threads(self.threads)
+
+    def present_ids(self) -> np.ndarray:
+        """The ids of the granules present, in the kernel's row order."""
+        return self.ids
 
     def kinematics(self) -> _Kinematics:
         """The granules' velocities (the kernel's arrays) in internal units."""

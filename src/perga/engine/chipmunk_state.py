@@ -1,0 +1,137 @@
+"""Chipmunk state that pymunk's pickling does not carry exactly, read and written raw.
+
+pymunk pickles a space with its bodies, shapes, joints and cached contacts, but two things come
+back changed: a body's centre-of-gravity position ``p`` (pymunk sets ``position`` before
+``center_of_gravity``, and Chipmunk derives ``p`` from the position with the centre of gravity
+it holds at that moment, so a hammer whose centre of gravity is off its origin is moved by
+R·cog), and every joint's accumulated impulse ``jAcc`` (the solver's warm start; not pickled).
+Both are kept here as the doubles of Munk2D's structs (``chipmunk_structs.h``: ``cpBody``,
+``cpPivotJoint``, ``cpSimpleMotor``, ``cpRotaryLimitJoint``), read and written through the
+bodies' and joints' C pointers. The offsets are checked against pymunk's own getters (mass,
+moment, centre of gravity, velocity, angle, position; each joint's impulse, |jAcc|) every time,
+so a pymunk whose layout differs is refused, never read wrongly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+from numpy.typing import NDArray
+from pymunk._chipmunk import ffi
+
+# cpBody as doubles (x86-64 and every LP64/LLP64 ABI: pointers and doubles are 8 bytes):
+# 0 velocity_func, 1 position_func, 2 m, 3 m_inv, 4 i, 5 i_inv, 6-7 cog, 8-9 p, 10-11 v,
+# 12-13 f, 14 a, 15 w, 16 t, 17-22 transform (a b c d tx ty)
+_BODY = slice(2, 23)
+_M, _I, _COG, _P, _V, _A, _W, _TX = 2, 4, 6, 8, 10, 14, 15, 21
+# cpConstraint is 13 doubles (6 pointers, maxForce, errorBias, maxBias, cpBool padded, 3
+# pointers); each joint's own fields follow it
+_MAX_FORCE = 6
+_JACC = {pymunk.PivotJoint: (25, 2), pymunk.SimpleMotor: (15, 1), pymunk.RotaryLimitJoint: (17, 1)}
+"""Joint class: (index of jAcc in doubles, its length)."""
+_OWN = {
+    pymunk.PivotJoint: ("anchor_a", 13),
+    pymunk.SimpleMotor: ("rate", 13),
+    pymunk.RotaryLimitJoint: ("min", 13),
+}
+"""Joint class: (a property, the index of its first double), for the layout check."""
+
+
+class LayoutError(RuntimeError):
+    """This pymunk's C structs are not laid out as this module knows them."""
+
+
+@dataclass(frozen=True)
+class ChipmunkState:
+    """The raw doubles of every body of a space (in ``space.bodies`` order; m to the
+    transform) and every joint's jAcc (in ``space.constraints`` order)."""
+
+    bodies: NDArray[np.float64]
+    joints: NDArray[np.float64]
+
+
+def _doubles(pointer: object) -> object:
+    return ffi.cast("double *", pointer)
+
+
+def _check_body(body: pymunk.Body, raw: NDArray[np.float64]) -> None:
+    expected = {
+        "mass": (raw[_M - 2], body.mass),
+        "moment": (raw[_I - 2], body.moment),
+        "centre of gravity": (tuple(raw[_COG - 2 : _COG]), tuple(body.center_of_gravity)),
+        "velocity": (tuple(raw[_V - 2 : _V]), tuple(body.velocity)),
+        "angle": (raw[_A - 2], body.angle),
+        "angular velocity": (raw[_W - 2], body.angular_velocity),
+        "position": (tuple(raw[_TX - 2 : _TX]), tuple(body.position)),
+    }
+    for name, (read, held) in expected.items():
+        if read != held and not (read != read and held != held):  # NaN-safe equality
+            raise LayoutError(
+                f"pymunk's cpBody layout changed: the {name} read raw is {read}, pymunk's getter "
+                f"gives {held} (perga knows pymunk {pymunk.version}'s Munk2D layout)"
+            )
+
+
+def _joint_layout(joint: pymunk.Constraint) -> tuple[int, int]:
+    kind = type(joint)
+    if kind not in _JACC:
+        raise LayoutError(f"no known layout for the joint {kind.__name__}")
+    raw = _doubles(joint._constraint)
+    name, first = _OWN[kind]
+    own = getattr(joint, name)
+    own = tuple(own) if isinstance(own, tuple | pymunk.Vec2d) else (own,)
+    read = tuple(raw[first + k] for k in range(len(own)))
+    if read != own or raw[_MAX_FORCE] != joint.max_force:
+        raise LayoutError(
+            f"pymunk's {kind.__name__} layout changed: read {read} and max force "
+            f"{raw[_MAX_FORCE]}, pymunk gives {own} and {joint.max_force}"
+        )
+    return _JACC[kind]
+
+
+def capture(space: pymunk.Space) -> ChipmunkState:
+    """The space's bodies and joints as raw doubles (checked against pymunk's getters)."""
+    rows = []
+    for body in space.bodies:
+        raw = _doubles(body._body)
+        row = np.array([raw[k] for k in range(_BODY.start, _BODY.stop)])
+        _check_body(body, row)
+        rows.append(row)
+    joints = []
+    for joint in space.constraints:
+        first, length = _joint_layout(joint)
+        raw = _doubles(joint._constraint)
+        values = [raw[first + k] for k in range(length)]
+        length_read = math.sqrt(sum(v * v for v in values))  # cpvlength, cpfabs
+        if length_read != joint.impulse:
+            raise LayoutError(
+                f"pymunk's {type(joint).__name__} layout changed: |jAcc| read raw is "
+                f"{length_read}, its impulse is {joint.impulse}"
+            )
+        joints.extend(values)
+    width = _BODY.stop - _BODY.start
+    return ChipmunkState(np.array(rows).reshape(-1, width), np.array(joints, dtype=float))
+
+
+def restore(space: pymunk.Space, state: ChipmunkState) -> None:
+    """Write ``state`` (from :func:`capture` of the space this one was unpickled from) into
+    the space's bodies and joints, bit for bit."""
+    bodies = list(space.bodies)
+    if len(bodies) != state.bodies.shape[0]:
+        raise ValueError(f"{len(bodies)} bodies, the state holds {state.bodies.shape[0]}")
+    for body, row in zip(bodies, state.bodies, strict=True):
+        raw = _doubles(body._body)
+        for k, value in enumerate(row):
+            raw[_BODY.start + k] = value
+        _check_body(body, row)
+    values = iter(state.joints)
+    for joint in space.constraints:
+        first, length = _joint_layout(joint)
+        raw = _doubles(joint._constraint)
+        for k in range(length):
+            raw[first + k] = next(values)
+    if next(values, None) is not None:
+        raise ValueError("the state holds more joint impulses than the space has joints")
