@@ -129,11 +129,18 @@ def impact(
 
 
 def chamber_gas(
-    n: int, seed: int, row: np.ndarray, *, speed: float = 1.0, overlapping: bool = False
+    n: int,
+    seed: int,
+    row: np.ndarray,
+    *,
+    speed: float = 1.0,
+    overlapping: bool = False,
+    chunks: int | None = None,
 ) -> SoftGranules:
     """n granules (radii 0.8-1.2 RADIUS, mass ∝ r²) at random places in a round chamber of
     radius R_CHAMBER, non-overlapping unless ``overlapping``, with random velocities (speed m/s
-    per component) and spins; every contact under ``row``."""
+    per component) and spins; every contact under ``row``; the pair forces in ``chunks``
+    chunks (default: the kernel's)."""
     rng = np.random.default_rng(seed)
     r = RADIUS * rng.uniform(0.8, 1.2, n)
     pos: list[np.ndarray] = []
@@ -152,4 +159,5 @@ def chamber_gas(
         v=speed * rng.standard_normal((n, 2)),
         w=rng.standard_normal(n) * speed / RADIUS,
         walls=[chamber(R_CHAMBER)],
+        chunks=chunks,
     )

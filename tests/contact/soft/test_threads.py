@@ -21,22 +21,43 @@ def numba_two(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 @pytest.mark.parametrize(
-    ("granules", "free", "used"),
-    [(t.THREADED_FROM - 1, 2, 1), (t.THREADED_FROM, 2, 2), (t.THREADED_FROM, 1, 1)],
-)
-def test_auto_is_one_thread_unless_large_and_two_cores_free(numba_two, granules, free, used):
-    assert t.kernel_threads(None, granules, free) == used
+    ("asked", "granules", "chunks"),
+    [(None, t.THREADED_FROM - 1, 1), (None, t.THREADED_FROM, t.AUTO_CHUNKS), (3, 10, 3),
+     (1, 100_000, 1)],
+)  # fmt: skip
+def test_the_chunks_come_from_the_case_alone(asked, granules, chunks):
+    assert t.kernel_chunks(asked, granules) == chunks
 
 
-@pytest.mark.parametrize(("asked", "free", "used"), [(2, 2, 2), (2, 1, 1), (1, 2, 1), (8, 2, 2)])
-def test_asked_threads_never_exceed_the_free_cores_or_numba(numba_two, asked, free, used):
-    assert t.kernel_threads(asked, 10, free) == used
+@pytest.mark.parametrize(("chunks", "free", "used"), [(2, 2, 2), (2, 1, 1), (1, 2, 1), (8, 2, 2)])
+def test_threads_never_exceed_the_chunks_the_free_cores_or_numba(numba_two, chunks, free, used):
+    assert t.kernel_threads(chunks, free) == used
 
 
 def test_a_dask_worker_limit_of_one_holds(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(numba, "get_num_threads", lambda: 1)
-    assert t.kernel_threads(None, 100_000, 8) == 1
-    assert t.kernel_threads(4, 10, 8) == 1
+    assert t.kernel_threads(4, 8) == 1
+
+
+def test_a_run_gives_the_same_bytes_on_one_thread_and_on_two(tmp_path, monkeypatch, request):
+    """The soft separator with its work in two chunks (solver.threads = 2), run once with two
+    cores free and once with one: the tables and ParaView frames are identical."""
+    held = numba.get_num_threads()
+    numba.set_num_threads(2)  # the conftest holds numba at one thread; a run may now use two
+    request.addfinalizer(lambda: numba.set_num_threads(held))
+    runs = []
+    for free in (2, 1):
+        monkeypatch.setattr("perga.contact.soft.model.free_cores", lambda free=free: free)
+        out = tmp_path / f"free-{free}"
+        args = ["run", str(ROOT / "cases" / "soft-separator.toml"), "-o", str(out), "--quiet",
+                "--set", "solver.threads=2", "--set", "solver.duration=0.02"]  # fmt: skip
+        assert main(args) == 0
+        assert json.loads((out / "summary.json").read_text())["threads"] == free
+        runs.append(out)
+    files = sorted(p.relative_to(runs[0]) for p in runs[0].rglob("*") if p.is_file())
+    files = [f for f in files if f.name != "summary.json" and f.parts[0] != "checkpoints"]
+    assert len(files) > 40
+    assert [f for f in files if (runs[0] / f).read_bytes() != (runs[1] / f).read_bytes()] == []
 
 
 def test_free_cores_is_cores_minus_load(monkeypatch: pytest.MonkeyPatch) -> None:

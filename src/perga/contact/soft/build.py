@@ -114,12 +114,17 @@ def polygon_table(
 
 
 def soft_granules(
-    spec: SceneSpec, polygons: PolygonSet, polygon_materials: list[str], threads: int
+    spec: SceneSpec,
+    polygons: PolygonSet,
+    polygon_materials: list[str],
+    threads: int,
+    chunks: int,
 ) -> SoftGranules:
     """The system's granules as :class:`~perga.contact.soft.SoftGranules` at step
     ``spec.granule_dt``, with a round chamber wall (the kernel's circle) and the ``polygons``
     (hammers and a drawn wall: a posed :class:`~perga.contact.soft.polygon_set.PolygonSet` whose
-    ``mat`` indexes ``polygon_materials``), on ``threads`` threads."""
+    ``mat`` indexes ``polygon_materials``), its pair forces in ``chunks`` chunks computed on
+    ``threads`` threads."""
     materials = granule_table_materials(spec)
     walls = []
     if spec.chamber is not None and spec.chamber.outline is None:
@@ -139,6 +144,7 @@ def soft_granules(
         polygons=polygons,
         polygon_table=polygon_table(spec, materials, polygon_materials),
         threads=threads,
+        chunks=chunks,
         pairs=spec.granule_collisions,
         held=np.array([x.bond_force is not None for x in g], dtype=bool),
         bond_force=np.array([math.inf if x.bond_force is None else x.bond_force for x in g]),

@@ -70,7 +70,9 @@ class SoftGranules:
     default to 0; mat (n,) defaults to 0; inertia defaults to the disc m r²/2; walls: rows from
     ``chamber``/``plane``; gravity (2,), m/s²; dt: step, s (default ``dt_fraction`` times the
     shortest contact duration, Hertz evaluated at approach speed v_max, m/s); skin: Verlet skin,
-    m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's).
+    m (default ``neighbours.default_skin``); threads: numba threads used (default: numba's);
+    chunks: the granule-pair forces are summed in this many chunks (default: threads): the
+    results depend on the chunks, never on the threads that compute them.
     polygons, polygon_table: convex rigid bodies (hammers) and the granule-polygon contact table
     (``perga.contact.soft.polygon_set``), both or neither; the granules' ``mat`` indexes the
     table's rows.
@@ -106,6 +108,7 @@ class SoftGranules:
         v_max: float = 30.0,
         skin: float | None = None,
         threads: int | None = None,
+        chunks: int | None = None,
         polygons: PolygonSet | None = None,
         polygon_table: ContactTable | None = None,
         pairs: bool = True,
@@ -162,10 +165,11 @@ class SoftGranules:
         self._default_skin = skin is None
         self.skin = default_skin(self.r) if skin is None else float(skin)
         self.threads = numba.get_num_threads() if threads is None else int(threads)
+        self.chunks = self.threads if chunks is None else max(int(chunks), 1)
         self.f = np.zeros((n, 2))
         self.tq = np.zeros(n)
         self.a_prev = np.zeros((n, 3))
-        self._acc = kernel.new_accumulator(self.threads, n)
+        self._acc = kernel.new_accumulator(self.chunks, n)
         self.start, self.nbr, self.hist = empty_list(n)
         self.x_ref = self.x.copy()
         self._rebuild = True
@@ -320,9 +324,9 @@ class SoftGranules:
                 self._rebuild = True
 
     def set_threads(self, threads: int) -> None:
-        """Use ``threads`` numba threads (force chunks) from the next step on."""
+        """Use ``threads`` numba threads from the next step on (the chunks stay: the results
+        do not change)."""
         self.threads = max(int(threads), 1)
-        self._acc = kernel.new_accumulator(self.threads, self.n)
 
     def invalidate(self) -> None:
         """Force a neighbour-list rebuild at the next step (after editing x or r by hand)."""
@@ -383,6 +387,7 @@ class SoftGranules:
                 self.pairs,
                 self._rebuild,
                 self.steps,
+                self.threads > 1,
             ),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),

@@ -59,12 +59,14 @@ inside a parallel loop (numba issues #5872, #7135), and reading the granule arra
 bundle there changed the compiled fast-math arithmetic in the last bit; polygon and table
 bundles, only read there, are passed whole.
 
-Threads: pair forces are split in ``n_chunks`` contiguous ranges of i (one per thread), each
-accumulating into its own slice of ``acc``, summed per granule afterwards, so each pair is
-computed once and no two threads write the same memory (no races, results identical for a given
-n_chunks). With one chunk the pair and per-granule passes run in functions without a parallel
-region (``_pair_forces_serial``, ``_integrate_serial``): opening one costs microseconds per step
-even on one thread, which a small system pays many times over (docs/performance.md).
+Threads: pair forces are split in ``n_chunks`` contiguous ranges of i, each accumulating into
+its own slice of ``acc``, summed per granule afterwards in chunk order, so each pair is computed
+once and no two threads write the same memory (no races). The chunks fix every sum's order, so
+the results depend on n_chunks and never on the threads (``perga.contact.soft.threads``). On
+one thread the pair and per-granule passes take the chunks one after the other in functions
+without a parallel region (``_pair_forces_serial``, ``_integrate_serial``), with the same
+arithmetic: opening a region costs microseconds per step even on one thread, which a small
+system pays many times over (docs/performance.md).
 Everything else is per granule; polygon loads and their dissipation are summed per
 candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
 depend on the number of threads.
@@ -196,7 +198,8 @@ class Work(NamedTuple):
 class Settings(NamedTuple):
     """The call's scalars: n_steps; dt, s; gravity (2,), m/s²; skin, m; drag, 1/s; v_cap, m/s;
     pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first; first_step:
-    the number of steps taken before the call."""
+    the number of steps taken before the call; threaded: more than one thread computes the
+    chunks (else one thread takes them one after the other, without a parallel region)."""
 
     n_steps: int
     dt: float
@@ -207,6 +210,7 @@ class Settings(NamedTuple):
     pairs: bool
     rebuild: bool
     first_step: int
+    threaded: bool
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -349,11 +353,14 @@ def _pair_forces_serial(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
     lost,
 ):  # fmt: skip
-    """``pair_forces`` for one chunk, without a parallel region."""
-    lost[0] = _pair_range(
-        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
-        tangential, acc[0],
-    )  # fmt: skip
+    """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
+    n = x.shape[0]
+    n_chunks = acc.shape[0]
+    for c in range(n_chunks):
+        lost[c] = _pair_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, start, nbr, hist, dt, reach, tangential, acc[c],
+        )  # fmt: skip
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -556,21 +563,24 @@ def _integrate_serial(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
     chunk, step, reach,
 ):  # fmt: skip
-    """``_integrate`` for one chunk, without a parallel region."""
+    """``_integrate`` on one thread, chunk after chunk, without a parallel region."""
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
     held, bond_force, released_step, release_force = bonds
     damp = 1.0 / (1.0 + settings.drag * settings.dt)
-    dmax, smax, lost, umax = _integrate_range(
-        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, walls.rows, walls.hist,
-        work.acc, work.f, work.tq, held, bond_force, released_step, release_force, poly, table,
-        phist, rho, cand.start, cand.polygon, cand.loads, x_ref, settings.gravity,
-        (settings.dt, damp, settings.v_cap, step, reach),
-    )  # fmt: skip
-    chunk[0, 0] = dmax
-    chunk[0, 1] = smax
-    chunk[0, 2] = lost
-    chunk[0, 3] = umax
+    n = x.shape[0]
+    n_chunks = work.acc.shape[0]
+    for c in range(n_chunks):
+        dmax, smax, lost, umax = _integrate_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, walls.rows, walls.hist, work.acc, work.f, work.tq, held, bond_force,
+            released_step, release_force, poly, table, phist, rho, cand.start, cand.polygon,
+            cand.loads, x_ref, settings.gravity, (settings.dt, damp, settings.v_cap, step, reach),
+        )  # fmt: skip
+        chunk[c, 0] = dmax
+        chunk[c, 1] = smax
+        chunk[c, 2] = lost
+        chunk[c, 3] = umax
 
 
 @njit(cache=True)
@@ -646,6 +656,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     dissipated = work.dissipated
     n = x.shape[0]
     n_chunks = work.acc.shape[0]
+    threaded = n_chunks > 1 and settings.threaded
     n_poly = force.shape[0]
     origin = Pose(poly.vertices.copy(), poly.com.copy(), poly.pivot.copy())
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
@@ -677,7 +688,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
                 cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
-        if pairs and n_chunks > 1:
+        if pairs and threaded:
             pair_forces(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
                 start, nbr, hist, dt, reach, tangential, work.acc, lost,
@@ -687,7 +698,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
                 start, nbr, hist, dt, reach, tangential, work.acc, lost,
             )  # fmt: skip
-        if n_chunks > 1:
+        if threaded:
             _integrate(
                 granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
                 settings, work, x_ref, chunk, settings.first_step + step, reach,

@@ -33,7 +33,7 @@ from perga.contact.soft.build import granule_table_materials, soft_granules
 from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.machine import MachinePolygons
-from perga.contact.soft.threads import free_cores, kernel_threads, numba_threads
+from perga.contact.soft.threads import free_cores, kernel_chunks, kernel_threads, numba_threads
 from perga.engine import units as u
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
@@ -79,11 +79,14 @@ class SoftContacts:
         self._machine_dt = spec.machine_dt
         self.polygons = MachinePolygons(machine)
         self._hammer_rows = machine.hammer_rows
-        self.threads = kernel_threads(spec.contact_model.threads, len(spec.granules), free_cores())
-        """Threads the kernel uses (:mod:`perga.contact.soft.threads`; chosen for the granules
-        present at the start)."""
+        self.chunks = kernel_chunks(spec.contact_model.threads, len(spec.granules))
+        """Chunks of the kernel's pair forces (:mod:`perga.contact.soft.threads`: from the case
+        and the granules present at the start; the results depend on them)."""
+        self.threads = kernel_threads(self.chunks, free_cores())
+        """Threads that compute them (never more than the free cores; the results do not
+        depend on them)."""
         self.granules = soft_granules(
-            spec, self.polygons.polygons, self.polygons.materials, self.threads
+            spec, self.polygons.polygons, self.polygons.materials, self.threads, self.chunks
         )
         self.materials = granule_table_materials(spec)
         """The granule-table rows' materials (those of granules present and fed, then a round

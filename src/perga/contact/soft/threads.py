@@ -1,11 +1,17 @@
-"""How many threads the soft kernel uses: one unless asked or worth it, never more than free.
+"""How the soft kernel splits its work and how many threads do it.
+
+The kernel sums the granule-pair forces in chunks (``perga.contact.soft.kernel``), and the
+chunks fix the order of every sum: results depend on the chunk count, never on the threads that
+compute the chunks. So the chunks come from the case alone (``solver.threads`` if given; "auto":
+one below ``THREADED_FROM`` granules, ``AUTO_CHUNKS`` from there), and the threads from the
+machine: as many as chunks, never more than the free cores nor numba's own limit
+(``numba.get_num_threads``, which a Dask worker sets to one). The same case gives the same bytes
+on an idle machine, a busy one and a Dask worker.
 
 Each kernel step opens several parallel regions whose launch costs tens of µs; below
 ``THREADED_FROM`` granules that costs more than a second thread gains, and on a busy machine a
 second thread that has no free core to run on makes a step many times slower
-(docs/performance.md). So "auto" is one thread unless the system has ``THREADED_FROM`` granules
-or more and at least two cores are free; a number asked for is honoured up to the free cores.
-Neither exceeds numba's own limit (``numba.get_num_threads``), which a Dask worker sets to one.
+(docs/performance.md).
 """
 
 from __future__ import annotations
@@ -17,7 +23,10 @@ from contextlib import contextmanager
 import numba
 
 THREADED_FROM = 4000
-"""Granule count from which "auto" uses more than one thread (docs/performance.md)."""
+"""Granule count from which "auto" splits the work (docs/performance.md)."""
+AUTO_CHUNKS = 2
+"""Chunks of "auto" from ``THREADED_FROM`` granules: the gain measured on two cores
+(docs/performance.md); more threads need ``solver.threads``."""
 
 
 def free_cores() -> int:
@@ -26,13 +35,16 @@ def free_cores() -> int:
     return max(1, (cores or 1) - round(os.getloadavg()[0]))
 
 
-def kernel_threads(requested: int | None, granules: int, free: int) -> int:
-    """The threads to use: ``requested`` (None: "auto") for a system of ``granules`` granules
-    with ``free`` cores free."""
-    limit = min(free, numba.get_num_threads())
+def kernel_chunks(requested: int | None, granules: int) -> int:
+    """The chunks of a system of ``granules`` granules: ``requested`` threads (None: "auto")."""
     if requested is None:
-        return limit if granules >= THREADED_FROM and limit >= 2 else 1
-    return max(1, min(requested, limit))
+        return AUTO_CHUNKS if granules >= THREADED_FROM else 1
+    return max(1, requested)
+
+
+def kernel_threads(chunks: int, free: int) -> int:
+    """The threads that compute ``chunks`` chunks with ``free`` cores free."""
+    return max(1, min(chunks, free, numba.get_num_threads()))
 
 
 @contextmanager
