@@ -101,29 +101,52 @@ def _schema(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    if (args.case is None) == (args.resume is None):
+        return _problems(["perga run needs a CASE or --resume RUN (one of them)"])
+    if args.resume is not None and (args.set or args.output or args.overwrite):
+        return _problems(["--resume RUN goes on with the run as it was: no --set, -o, --overwrite"])
     with StopRequest() as stop:  # the imports and the case, never stopped halfway
         from tqdm import tqdm
 
         from perga.case import load_case
-        from perga.runner import RunStoppedError, prepare_directory, run_case
+        from perga.checkpoints import CheckpointError
+        from perga.runner import (
+            RunStoppedError,
+            check_resumable,
+            prepare_directory,
+            resume_run,
+            run_case,
+        )
 
-        case = load_case(args.case, overrides=args.set or ())
+        if args.resume is not None:
+            if not (args.resume / "case.toml").is_file():
+                return _problems([f"{args.resume} is not a perga run (it has no case.toml)"])
+            case = load_case(args.resume / "case.toml")
+        else:
+            case = load_case(args.case, overrides=args.set or ())
         stop.check()
     if case.chamber is None:  # a parameter set (for paper-check), not a scene
         return _problems(
             [f"{args.case}: [chamber] is missing: perga run needs the wall around the rotor "
              "(a case without one is a parameter set for perga paper-check)"]
         )  # fmt: skip
-    directory = args.output or Path(case.output.directory.format(case=args.case.stem))
-    try:
-        prepare_directory(directory, args.overwrite)
-    except FileExistsError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # a file in the way, no permission, a read-only file system
-        print(f"error: cannot make the run directory {directory}: {exc.strerror or exc}; "
-              "choose another -o DIR", file=sys.stderr)  # fmt: skip
-        return 2
+    if args.resume is not None:
+        directory = args.resume
+        try:
+            check_resumable(directory)
+        except CheckpointError as exc:
+            return _problems([f"cannot resume: {exc}"])
+    else:
+        directory = args.output or Path(case.output.directory.format(case=args.case.stem))
+        try:
+            prepare_directory(directory, args.overwrite)
+        except FileExistsError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except OSError as exc:  # a file in the way, no permission, a read-only file system
+            print(f"error: cannot make the run directory {directory}: {exc.strerror or exc}; "
+                  "choose another -o DIR", file=sys.stderr)  # fmt: skip
+            return 2
     bar = tqdm(
         total=case.solver.duration,
         unit="s(sim)",
@@ -136,10 +159,17 @@ def _run(args: argparse.Namespace) -> int:
         bar.set_postfix_str(f"{steps / max(bar.format_dict['elapsed'], 1e-9):.0f} steps/s")
 
     try:
-        summary = run_case(case, args.case, directory, progress)
+        if args.resume is not None:
+            summary = resume_run(case, directory, progress)
+        else:
+            summary = run_case(case, args.case, directory, progress)
+    except CheckpointError as exc:
+        bar.close()
+        return _problems([f"cannot resume: {exc}"])
     except KeyboardInterrupt as exc:
         bar.close()
-        print(f"interrupted: everything up to now is in {directory}", file=sys.stderr)
+        print(f"interrupted: everything up to now is in {directory}; perga run --resume "
+              f"{directory} goes on from its last checkpoint", file=sys.stderr)  # fmt: skip
         return exit_status(exc)
     except RunStoppedError as exc:
         bar.close()
@@ -465,7 +495,13 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--plots", metavar="DIR", help="write one PNG per claim into DIR")
     check.set_defaults(handler=_paper_check)
     run = sub.add_parser("run", help="simulate a case: tables and summary.json in a run directory")
-    run.add_argument("case", type=Path, metavar="CASE")
+    run.add_argument("case", type=Path, metavar="CASE", nargs="?")
+    run.add_argument(
+        "--resume",
+        type=Path,
+        metavar="RUN",
+        help="go on with the stopped or killed run RUN from its newest checkpoint (no CASE)",
+    )
     run.add_argument("-o", "--output", type=Path, help="run directory (default: output.directory)")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     run.add_argument("--quiet", action="store_true", help="no progress bar")

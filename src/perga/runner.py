@@ -11,17 +11,20 @@ with the reason.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import shutil
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 import tomli_w
 
+from perga import checkpoints
 from perga.case.schema import Case
 from perga.engine.simulation import Simulation
 from perga.model.frame import Frame
@@ -59,6 +62,10 @@ class RunSummary:
     energy: dict[str, float] = field(default_factory=dict)
     threads: int = 1
     """CPU threads the contact model used."""
+    checkpoints: int = 0
+    """Checkpoints written (RUN/checkpoints/, the last two kept)."""
+    resumed: list[float] = field(default_factory=list)
+    """Simulated times, s, at which the run was resumed from a checkpoint."""
     warnings: list[str] = field(default_factory=list)
 
 
@@ -131,78 +138,189 @@ def run_case(
     """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
     is also written to summary.json. A stop signal (:mod:`perga.stopping`; deferred to the end of
     the build or the next step boundary) and RunStoppedError are recorded in the summary and
-    re-raised after everything written so far is flushed."""
+    re-raised after everything written so far is flushed; a stop signal also leaves a
+    checkpoint to resume from (:func:`resume_run`)."""
     summary = RunSummary(case=str(case_path.resolve()), overrides=list(case.overrides))
     start = time.perf_counter()
-    recorders: list[Recorder] = []
-    sim: Simulation | None = None
+    run: _Run | None = None
     with StopRequest() as stop:
         try:
-            write_case_copy(case, case_path, directory / "case.toml")
-            spec = scene_spec(case)
-            record = case.output.record
-            options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
-            sim = Simulation(spec, **options)
-            summary.dt, summary.granules, summary.hammers = (
-                spec.granule_dt,
-                len(spec.granules),
-                len(spec.hammers),
-            )
-            assert spec.plan is not None and spec.chamber is not None
-            summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
-            stop.check()
-            write_scene(directory, spec)
-            recorders = make_recorders(record, directory, spec, case.output.granule_table)
-            frames = PhaseLock(case.output.every)
-            n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-            outer, thickness = spec.chamber.outer_radius, spec.chamber.wall_thickness
-            report_every = max(1, n_steps // 200)
-            contacts = "vtk" in record
-
-            def write_frame() -> None:
-                frame = sim.frame(contacts=contacts)
-                check_granules(frame, outer, thickness, sim.dt)
-                check_population(frame)
-                for recorder in recorders:
-                    recorder.record(frame, sim.events())
-                summary.frames += 1
-
-            frames.due(0.0)
-            write_frame()
-            with sim.contacts.running():
-                for _ in range(n_steps):
-                    sim.step()
-                    stop.check()
-                    last = sim.steps == n_steps
-                    if frames.due(sim.time) or last:
-                        write_frame()
-                    if progress and (sim.steps % report_every == 0 or last):
-                        progress(sim.time, case.solver.duration, sim.steps)
-            summary.status = "completed"
-        except KeyboardInterrupt as exc:
-            summary.status, summary.reason = "interrupted", describe(exc)
-            raise
-        except RunStoppedError as exc:
-            summary.status, summary.reason = "failed", str(exc)
-            raise
-        except Exception as exc:
-            summary.status, summary.reason = "failed", f"{type(exc).__name__}: {exc}"
-            raise
+            with _ending(summary):
+                run = _build(case, case_path, directory, summary, stop)
+                run.frames.due(0.0)
+                run.write_frame(summary)
+                if run.grid is not None:  # from now on a stopped run can be resumed
+                    run.checkpoint(summary, start, write=True)
+                run.advance(summary, stop, progress, start)
         finally:
-            _finish(summary, sim, recorders, time.perf_counter() - start, directory)
+            _finish(summary, run, time.perf_counter() - start, directory)
     return summary
 
 
-def _finish(
-    summary: RunSummary,
-    sim: Simulation | None,
-    recorders: list[Recorder],
-    wall: float,
-    directory: Path,
-) -> None:
-    for recorder in recorders:
+def _build(
+    case: Case, case_path: Path, directory: Path, summary: RunSummary, stop: StopRequest
+) -> _Run:
+    """The case's copy, its simulation, scene.json and recorders: a run ready for frame 0."""
+    write_case_copy(case, case_path, directory / "case.toml")
+    spec = scene_spec(case)
+    record = case.output.record
+    options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
+    sim = Simulation(spec, **options)
+    summary.dt, summary.granules, summary.hammers = (
+        spec.granule_dt,
+        len(spec.granules),
+        len(spec.hammers),
+    )
+    assert spec.plan is not None
+    summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
+    stop.check()
+    write_scene(directory, spec)
+    recorders = make_recorders(record, directory, spec, case.output.granule_table)
+    n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
+    return _Run(case, directory, sim, recorders, PhaseLock(case.output.every), n_steps)
+
+
+def resume_run(case: Case, directory: Path, progress: Progress | None = None) -> RunSummary:
+    """Go on with the run in ``directory`` from its newest checkpoint (CheckpointError when it
+    has none this perga can use): the tables and series are cut back to where they stood then
+    and appended to, so that they end as those of a run that never stopped. ``case`` is the
+    run's own copy (``case.toml``, loaded), which must be the one the checkpoint was written
+    from."""
+    check_resumable(directory)
+    with StopRequest() as stop:
+        sim, handed_over, _ = checkpoints.load(directory, case_digest(directory))
+        summary = handed_over["summary"]
+        assert isinstance(summary, RunSummary)
+        summary.status, summary.reason = "running", ""
+        summary.resumed.append(sim.time)
+        start = time.perf_counter() - summary.wall_time
+        run = _Run(case, directory, sim, handed_over["recorders"], handed_over["frames"],
+                   handed_over["n_steps"])  # fmt: skip
         try:
-            recorder.close()
+            run.advance(summary, stop, progress, start)
+        finally:
+            _finish(summary, run, time.perf_counter() - start, directory)
+    return summary
+
+
+def check_resumable(directory: Path) -> None:
+    """CheckpointError unless the run in ``directory`` stopped before its end (a run killed
+    before it wrote summary.json counts as stopped)."""
+    summary = directory / "summary.json"
+    try:
+        status = json.loads(summary.read_text()).get("status") if summary.is_file() else None
+    except (OSError, ValueError, AttributeError):
+        status = None
+    if status == "completed":
+        raise checkpoints.CheckpointError(f"{directory} completed: there is nothing to resume")
+
+
+def case_digest(directory: Path) -> str:
+    """SHA-256 of the run's copy of its case file."""
+    return hashlib.sha256((directory / "case.toml").read_bytes()).hexdigest()
+
+
+@contextmanager
+def _ending(summary: RunSummary) -> Iterator[None]:
+    """Record in the summary how the block ended if by an exception: interrupted (a stop
+    signal), failed (RunStoppedError or another error, with the reason); re-raise."""
+    try:
+        yield
+    except KeyboardInterrupt as exc:
+        summary.status, summary.reason = "interrupted", describe(exc)
+        raise
+    except RunStoppedError as exc:
+        summary.status, summary.reason = "failed", str(exc)
+        raise
+    except Exception as exc:
+        summary.status, summary.reason = "failed", f"{type(exc).__name__}: {exc}"
+        raise
+
+
+class _Run:
+    """A run under way: the simulation, its recorders and frame clock, the steps it is to
+    take, and its checkpoint grid (:mod:`perga.checkpoints`)."""
+
+    def __init__(
+        self,
+        case: Case,
+        directory: Path,
+        sim: Simulation,
+        recorders: list[Recorder],
+        frames: PhaseLock,
+        n_steps: int,
+    ) -> None:
+        self.directory, self.sim, self.recorders = directory, sim, recorders
+        self.frames, self.n_steps = frames, n_steps
+        chamber = sim.spec.chamber
+        assert chamber is not None
+        self.outer, self.thickness = chamber.outer_radius, chamber.wall_thickness
+        self.contacts = "vtk" in case.output.record
+        self.duration = case.solver.duration
+        every = case.output.checkpoint_every
+        self.grid = PhaseLock(every) if every > 0 else None
+        if self.grid is not None:
+            self.grid.due(sim.time)  # the grid points after now
+        self.every_wall = case.output.checkpoint_wall
+        self.last_written = -math.inf
+        """When the last checkpoint file was written (time.perf_counter), s."""
+        self.case_digest = case_digest(directory)
+
+    def write_frame(self, summary: RunSummary) -> None:
+        """The simulation's frame, checked, to every recorder."""
+        sim = self.sim
+        frame = sim.frame(contacts=self.contacts)
+        check_granules(frame, self.outer, self.thickness, sim.dt)
+        check_population(frame)
+        for recorder in self.recorders:
+            recorder.record(frame, sim.events())
+        summary.frames += 1
+
+    def checkpoint(self, summary: RunSummary, start: float, write: bool) -> None:
+        """Take a checkpoint of the run as it stands (between steps), write it if ``write``,
+        and go on from it, as a resumed run would."""
+        summary.wall_time = time.perf_counter() - start
+        summary.checkpoints += write
+        handed_over = {
+            "summary": summary,
+            "recorders": self.recorders,
+            "frames": self.frames,
+            "n_steps": self.n_steps,
+        }
+        data = checkpoints.dump(self.sim, handed_over, self.directory, self.case_digest)
+        if write:
+            checkpoints.write(self.directory, self.sim.steps, data)
+            self.last_written = time.perf_counter()
+        self.sim, _ = checkpoints.read(data)
+
+    def advance(
+        self, summary: RunSummary, stop: StopRequest, progress: Progress | None, start: float
+    ) -> None:
+        """Step to the end, frames as they fall due, checkpoints on their grid; the summary's
+        status says how it ended."""
+        report_every = max(1, self.n_steps // 200)
+        with _ending(summary), self.sim.contacts.running():
+            while self.sim.steps < self.n_steps:
+                sim = self.sim
+                sim.step()
+                stop.check()
+                last = sim.steps == self.n_steps
+                if self.frames.due(sim.time) or last:
+                    self.write_frame(summary)
+                if progress and (sim.steps % report_every == 0 or last):
+                    progress(sim.time, self.duration, sim.steps)
+                if not last and self.grid is not None and self.grid.due(sim.time):
+                    write = time.perf_counter() - self.last_written >= self.every_wall
+                    self.checkpoint(summary, start, write)
+            summary.status = "completed"
+
+
+def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path) -> None:
+    """Close the recorders and write summary.json (whole, by a rename)."""
+    sim = None if run is None else run.sim
+    for recorder in [] if run is None else run.recorders:
+        try:
+            recorder.close(complete=summary.status == "completed")
         except Exception as exc:  # summary.json must still be written
             summary.warnings.append(f"{type(recorder).__name__}.close failed: {exc}")
     summary.wall_time = wall

@@ -575,9 +575,10 @@ class Solver(Strict):
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
     threads: int | Literal["auto"] = Field(
         "auto",
-        description="threads of the soft contact kernel, in [1, 256], never more than the free "
-        "cores; 'auto': one unless there are 4,000 granules or more and two cores are free "
-        "(rigid contacts: one)",
+        description="threads of the soft contact kernel, in [1, 256]: its pair forces are "
+        "summed in this many chunks, which fix the results, computed by as many threads as "
+        "cores are free; 'auto': one chunk below 4,000 granules, two from there (rigid "
+        "contacts: one thread)",
     )
 
     @model_validator(mode="after")
@@ -674,6 +675,22 @@ class Output(Strict):
         "5x faster to write and 18x faster to read at 10,000 granules; parts are written when "
         "full and at the end, so a killed run loses the part in memory; perga.output.tables)",
     )
+    checkpoint_every: float = Field(
+        0.1,
+        ge=0.0,
+        description="simulated time between checkpoints, s, 0 (none) or >= 1e-4: the "
+        "whole state in RUN/checkpoints/ (the last two kept), from which perga run --resume RUN "
+        "goes on after a stop or a crash, bit for bit as if never stopped. A rigid run goes on "
+        "from each checkpoint as a resumed one does, so this grid is part of its results "
+        "(perga.checkpoints)",
+    )
+    checkpoint_wall: float = Field(
+        0.0,
+        ge=0.0,
+        le=1e7,
+        description="wall-clock time, s, 0 to 1e7, that must pass between checkpoint files: a "
+        "checkpoint falling sooner is taken (and gone on from) but not written (0: every one)",
+    )
     vtk_3d: bool = Field(
         False,
         description="with 'vtk': also the 3-D view, RUN/vtk/machine3d.pvd and chamber3d.vtu: "
@@ -681,6 +698,14 @@ class Output(Strict):
         "geometry's; rotor: its mesh's height, else the hammers'), centred on the rotor plane "
         "z = 0, and the chamber wall as tall as the tallest part (see perga.output.vtk3d)",
     )
+
+    @model_validator(mode="after")
+    def _checkpoints_not_too_often(self) -> Output:
+        if 0 < self.checkpoint_every < 1e-4:
+            raise ValueError(
+                f"checkpoint_every = {self.checkpoint_every} s: 0 (no checkpoints) or >= 1e-4 s"
+            )
+        return self
 
     @model_validator(mode="after")
     def _vtk_3d_needs_vtk(self) -> Output:

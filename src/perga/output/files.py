@@ -27,3 +27,21 @@ def write_new(path: Path, data: bytes) -> None:
         path.unlink(missing_ok=True)
         raise
     os.close(fd)
+
+
+def reopen_at(path: Path, size: int) -> int:
+    """A descriptor of the existing file ``path`` for writing at byte ``size``, the file cut to
+    that size: going on from a checkpoint. OSError if the file is missing or shorter."""
+    fd = os.open(path, os.O_RDWR)
+    try:
+        if os.fstat(fd).st_size < size:
+            raise OSError(
+                f"{path} holds {os.fstat(fd).st_size} bytes, fewer than the {size} it held at "
+                "the checkpoint"
+            )
+        os.ftruncate(fd, size)
+        os.lseek(fd, size, os.SEEK_SET)
+    except OSError:
+        os.close(fd)
+        raise
+    return fd

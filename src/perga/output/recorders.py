@@ -27,14 +27,16 @@ from perga.output.vtk import VtkRecorder
 
 class Recorder(Protocol):
     """What the runner needs of a recorder: built as ``Recorder(directory, spec)``,
-    ``record(frame, events)`` at each frame and ``close()`` at the end of the run, whatever
-    ended it."""
+    ``record(frame, events)`` at each frame and ``close(complete)`` at the end of the run,
+    whatever ended it; pickled with a checkpoint, it goes on from the state its files had then
+    (:mod:`perga.checkpoints`)."""
 
     def record(self, frame: Frame, events: Events) -> None:
         """Append what this recorder keeps of ``frame`` and of ``events`` (all so far)."""
 
-    def close(self) -> None:
-        """Finish the recorder's files (idempotent)."""
+    def close(self, complete: bool = True) -> None:
+        """Finish the recorder's files (idempotent); ``complete``: the run ended as planned
+        (else it may be resumed: keep what going on needs)."""
 
 
 class TableRecorder:
@@ -42,8 +44,8 @@ class TableRecorder:
 
     table: Table
 
-    def close(self) -> None:
-        """Close the table (idempotent)."""
+    def close(self, complete: bool = True) -> None:
+        """Close the table (idempotent; whole rows only, complete or not)."""
         self.table.close()
 
 

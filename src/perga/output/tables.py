@@ -24,7 +24,7 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
-from perga.output.files import write_all
+from perga.output.files import reopen_at, write_all
 
 _NO_HEADER = pacsv.WriteOptions(include_header=False, eol="\r\n")  # the csv module's line end
 
@@ -61,6 +61,16 @@ class Table(_Closable):
         """Bytes of whole blocks in the file."""
         self.rows = 0
         self._append(_csv_lines([self.columns]))
+
+    def __getstate__(self) -> dict[str, object]:
+        """The table as it stands (a checkpoint): its path, header, size and rows."""
+        return {"path": self.path, "columns": self.columns, "_size": self._size, "rows": self.rows}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        """Go on appending to the file as it stood at the checkpoint: rows written after it
+        are cut off (OSError if the file is missing or shorter than then)."""
+        self.__dict__.update(state)
+        self._fd = reopen_at(self.path, self._size)
 
     def write(self, rows: Iterable[Sequence[object]]) -> None:
         """Append rows (each as long as the header)."""
@@ -155,6 +165,14 @@ class ParquetTable(_Closable):
         self.rows += block.num_rows
         if self._pending >= PART_ROWS:
             self._write_part()
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        """Go on from a checkpoint: parts written after it are removed (the rows they hold
+        come again from the blocks kept in memory and the steps that follow)."""
+        self.__dict__.update(state)
+        for part in self.path.glob("part-*.parquet"):
+            if int(part.stem.removeprefix("part-")) >= self._parts:
+                part.unlink()
 
     def _write_part(self) -> None:
         if not self._blocks:

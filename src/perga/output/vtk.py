@@ -64,6 +64,7 @@ from perga.model.frame import Frame, MachineFrame
 from perga.model.records import Events, Impact
 from perga.model.spec import RotorSpec, SceneSpec
 from perga.output import vtk3d, vtk_grid
+from perga.output.files import reopen_at
 from perga.output.vtk_grid import POLY_LINE, POLYGON
 
 FloatArray = NDArray[np.float64]
@@ -100,6 +101,22 @@ class PvdSeries:
         self._fd: int | None = None
         self._end = 0
         """Byte offset of the closing tags in the index."""
+
+    def __getstate__(self) -> dict[str, object]:
+        """The series as it stands (a checkpoint): its frames and the index's length."""
+        return {k: v for k, v in self.__dict__.items() if k != "_fd"}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        """Go on from a checkpoint: the index cut back to its frames then, with its closing
+        tags, and the frames written after it removed."""
+        self.__dict__.update(state)
+        self._fd = None
+        for frame in self.directory.glob(f"{self.name}_*.vtu"):
+            if int(frame.stem.rpartition("_")[2]) >= len(self.entries):
+                frame.unlink()
+        if self.entries:
+            self._fd = reopen_at(self.path, self._end)
+            os.write(self._fd, _PVD_END.encode("utf-8"))
 
     @property
     def path(self) -> Path:
@@ -178,6 +195,21 @@ class VtkRecorder:
         self._outlines.append(_disc(spec.rotor))
         self._closed = False
         self._started = False
+
+    def __getstate__(self) -> dict[str, object]:
+        """The recorder as it stands (a checkpoint), with the trajectory scratch file's length
+        in place of the open file."""
+        state = {k: v for k, v in self.__dict__.items() if k != "_scratch"}
+        state["_scratch_size"] = None if self._scratch is None else self._scratch.tell()
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        """Go on from a checkpoint: the scratch file cut back to its length then."""
+        size = state.pop("_scratch_size")
+        self.__dict__.update(state)
+        self._scratch = None
+        if isinstance(size, int):
+            self._scratch = os.fdopen(reopen_at(self.scratch, size), "wb")
 
     def _start(self, frame: Frame) -> None:
         """Material names and the chamber, at the first frame."""
@@ -260,8 +292,10 @@ class VtkRecorder:
             self._impact_count = np.pad(self._impact_count, (0, size - len(self._impact_count)))
         np.add.at(self._impact_count, np.asarray(granules, dtype=np.int64), 1)
 
-    def close(self) -> None:
-        """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded)."""
+    def close(self, complete: bool = True) -> None:
+        """Write ``trajectories.vtu`` and ``impacts.vtu`` (nothing if no frame was recorded);
+        the trajectory scratch file is removed unless the run is not ``complete`` (it may be
+        resumed from a checkpoint, which goes on with the file). Idempotent."""
         if self._closed or not self._started:
             return
         self._closed = True
@@ -271,7 +305,8 @@ class VtkRecorder:
         try:
             self._write_trajectories()
         finally:
-            self.scratch.unlink(missing_ok=True)
+            if complete:
+                self.scratch.unlink(missing_ok=True)
         self._write_impacts()
 
     def _write_trajectories(self) -> None:
