@@ -5,14 +5,14 @@ the soft separator; every stopped run must read back whole (tests/test_faults.py
 run that never stopped, byte for byte (``summary.json``, which counts wall time and
 resumptions, and the checkpoints themselves excepted).
 
-The moment is drawn from start-up (the interpreter, the imports, the build) to the end of the
-uninterrupted run's wall time; a signal that lands before the run directory holds its case is
-counted as "stopped before the run began", one before the first checkpoint (at t = 0, after the
-build) as "no checkpoint yet" (``--resume`` then says so, exit 2), one after the end as "ended
-first" (also when it lands as the completed process exits: the summary says completed).
-Do not edit perga while this runs: a checkpoint is read only by the code that wrote it.
+The moment is drawn uniformly from the run's first checkpoint (written at t = 0, after the
+build) to the end of the uninterrupted run's wall time, so that every trial has something to
+resume from; a signal that lands after the end, or as the completed process exits, is counted
+as "ended first", and trials go on until ``--trials`` runs were stopped and resumed. Signals
+during start-up are tests/test_faults.py's. Do not edit perga while
+this runs: a checkpoint is read only by the code that wrote it.
 
-    python benchmarks/kill_resume.py                  # 20 trials each: ~25 min on 2 cores
+    python benchmarks/kill_resume.py                  # 20 trials each: ~40 min on 2 cores
     python benchmarks/kill_resume.py --trials 2       # a smoke run
 """
 
@@ -60,18 +60,25 @@ def identical(run: Path, reference: Path) -> bool:
     return outputs(run) == files and all(filecmp.cmp(run / f, reference / f, False) for f in files)
 
 
-def trial(
-    case: str, sets: list[str], reference: Path, out: Path, signum: int, moment: float
-) -> str:
-    """One stop at ``moment`` s after launch and its resumption: the outcome's name."""
+def first_checkpoint(out: Path, proc: subprocess.Popen[bytes]) -> float:
+    """Wait for the run's first checkpoint file; returns when it appeared (time.monotonic)."""
+    while not list((out / "checkpoints").glob("step-*.ckpt")):
+        if proc.poll() is not None:
+            raise RuntimeError(f"{out}: the run ended without a checkpoint")
+        time.sleep(0.01)
+    return time.monotonic()
+
+
+def trial(case: str, sets: list[str], reference: Path, out: Path, signum: int, delay: float) -> str:
+    """One stop ``delay`` s after the run's first checkpoint, and its resumption: the
+    outcome's name."""
     proc = subprocess.Popen(command(case, out, sets), stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)  # fmt: skip
-    time.sleep(moment)
+    first_checkpoint(out, proc)
+    time.sleep(delay)
     proc.send_signal(signum)
     if proc.wait(timeout=300) == 0:
         return "ended first"
-    if not (out / "case.toml").exists():
-        return "stopped before the run began"
     summary = out / "summary.json"
     if summary.exists() and json.loads(summary.read_text())["status"] == "completed":
         return "ended first"  # the signal came as the process was exiting
@@ -81,8 +88,6 @@ def trial(
         [sys.executable, "-m", "perga.cli", "run", "--resume", str(out), "--quiet"],
         capture_output=True, text=True, timeout=600,
     )  # fmt: skip
-    if resumed.returncode == 2 and "has no checkpoint" in resumed.stderr:
-        return "no checkpoint yet"
     if resumed.returncode != 0:
         return f"resume failed: {resumed.stderr.strip()[-200:]}"
     assert_readable(out)
@@ -91,7 +96,9 @@ def trial(
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--trials", type=int, default=20, help="trials per signal and engine")
+    parser.add_argument(
+        "--trials", type=int, default=20, help="stopped and resumed runs per signal and engine"
+    )
     parser.add_argument("--seed", type=int, default=15)
     args = parser.parse_args()
     rng = random.Random(args.seed)
@@ -100,19 +107,23 @@ def main() -> None:
         root = Path(scratch)
         for engine, (case, sets) in CASES.items():
             reference = root / f"{engine}-reference"
-            start = time.perf_counter()
-            subprocess.run(command(case, reference, sets), check=True)
-            span = time.perf_counter() - start
+            proc = subprocess.Popen(command(case, reference, sets))
+            start = first_checkpoint(reference, proc)
+            assert proc.wait() == 0
+            span = time.monotonic() - start  # from the first checkpoint to the end
             for signum in SIGNALS:
                 outcomes: Counter[str] = Counter()
-                for k in range(args.trials):
+                for k in range(3 * args.trials):  # until --trials stopped runs were resumed
+                    if k - outcomes["ended first"] == args.trials:
+                        break
                     out = root / f"{engine}-{signum}-{k}"
-                    moment = rng.uniform(0.05, span)
-                    outcomes[trial(case, sets, reference, out, signum, moment)] += 1
+                    delay = rng.uniform(0.0, span)
+                    outcomes[trial(case, sets, reference, out, signum, delay)] += 1
                     shutil.rmtree(out, ignore_errors=True)
                 name = signal.Signals(signum).name
-                print(f"{engine:5s} {name:7s} (run {span:.1f} s): " + ", ".join(
-                    f"{n} {what}" for what, n in sorted(outcomes.items())), flush=True)  # fmt: skip
+                counts = ", ".join(f"{n} {what}" for what, n in sorted(outcomes.items()))
+                print(f"{engine:5s} {name:7s} ({span:.1f} s after the first checkpoint): {counts}",
+                      flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -95,19 +95,38 @@ def parse_fit(text: str, where: str = "--fit") -> FitKey:
     return FitKey(key.strip(), lo, hi)
 
 
+def _finite(text: str) -> float:
+    """``text`` as a finite float, NaN if it is not one."""
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return math.nan
+    return value if math.isfinite(value) else math.nan
+
+
 def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     """The data file, checked against the case (StudyError listing every problem: a metric
-    that does not exist, a condition column that is not a case key or whose value the case
-    refuses, a value that is not a number, an sd that is not > 0)."""
+    that does not exist, a row of the wrong length, a condition column that is not a case key
+    or a row whose values the case refuses, a value that is not a finite number, an sd that is
+    not a finite number > 0)."""
     path = Path(path)
     try:
         with path.open(encoding="utf-8", newline="") as stream:
-            table = list(csv.DictReader(stream))
+            columns, *cells = list(csv.reader(stream)) or [[]]
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise StudyError([f"{path}: cannot read ({exc})"]) from None
-    if not table:
+    lines = [(i, row) for i, row in enumerate(cells, start=2) if any(c.strip() for c in row)]
+    if not lines:
         raise StudyError([f"{path}: no rows (a header and one row per measured condition)"])
-    columns = list(table[0])
+    named = [c for c in columns if c.strip()]
+    if len(set(named)) != len(columns):
+        raise StudyError([f"{path}: line 1: every column needs a name of its own ({columns})"])
+    short = [i for i, row in lines if len(row) != len(columns)]
+    if short:
+        raise StudyError(
+            [f"{path}: line {i}: {len(columns)} cells expected, as in the header" for i in short]
+        )
+    table = [(i, dict(zip(columns, row, strict=True))) for i, row in lines]
     metrics = [c for c in columns if c.partition(":")[0] in METRICS]
     sds = [c for c in columns if c.endswith(SD_SUFFIX) and c[: -len(SD_SUFFIX)] in metrics]
     conditions = [c for c in columns if c not in metrics and c not in sds]
@@ -124,25 +143,29 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
         np.full_like(np.zeros((len(table), len(metrics))), math.nan),
     )
     rows: list[dict[str, Any]] = []
-    for i, record in enumerate(table, start=2):
+    for k, (i, record) in enumerate(table):
         rows.append({c: parse_value(record[c]) for c in conditions})
         for j, m in enumerate(metrics):
-            try:
-                values[i - 2, j] = float(record[m])
-            except (TypeError, ValueError):
-                problems.append(f"{path}: line {i}, column {m}: not a number ({record[m]!r})")
+            values[k, j] = _finite(record[m])
+            if not math.isfinite(values[k, j]):
+                problems.append(
+                    f"{path}: line {i}, column {m}: not a finite number ({record[m]!r})"
+                )
             if f"{m}{SD_SUFFIX}" in record:
-                try:
-                    sd[i - 2, j] = float(record[f"{m}{SD_SUFFIX}"])
-                except (TypeError, ValueError):
-                    sd[i - 2, j] = -1.0
-                if not sd[i - 2, j] > 0:
-                    problems.append(f"{path}: line {i}, column {m}{SD_SUFFIX}: must be > 0")
-    if conditions and not problems:
-        example = {**rows[0], **{f.key: f.low for f in fits}}
-        problems += check_keys(case, example, f"{path}: condition columns")
-    elif not problems:
-        problems += check_keys(case, {f.key: f.low for f in fits}, f"{path}: --fit")
+                sd[k, j] = _finite(record[f"{m}{SD_SUFFIX}"])
+                if not sd[k, j] > 0:  # NaN (not a finite number) fails too
+                    problems.append(
+                        f"{path}: line {i}, column {m}{SD_SUFFIX}: must be a finite number > 0 "
+                        f"({record[f'{m}{SD_SUFFIX}']!r})"
+                    )
+    fitted = {f.key: f.low for f in fits}
+    if not problems:  # every distinct condition, as the runs will set it
+        seen: list[dict[str, Any]] = []
+        for (i, _), row in zip(table, rows, strict=True):
+            if row not in seen:
+                seen.append(row)
+                where = f"{path}: line {i}, condition columns" if row else f"{path}: --fit"
+                problems += check_keys(case, {**row, **fitted}, where)
     if problems:
         raise StudyError(problems)
     return Data(path, rows, metrics, values, sd)
