@@ -26,7 +26,14 @@ from perga.model.from_case import scene_spec
 ROOT = Path(__file__).resolve().parents[1]
 RIGID = ["solver.duration=0.3", "output.checkpoint_every=0.02"]
 SOFT = ["solver.duration=0.15", "output.checkpoint_every=0.01"]
-CASES = {"rigid": ("separator.toml", RIGID), "soft": ("soft-separator.toml", SOFT)}
+CASES = {
+    "rigid": ("separator.toml", RIGID),
+    "soft": ("soft-separator.toml", SOFT),
+    "parquet": ("soft-separator.toml", [*SOFT, 'output.granule_table="parquet"']),
+}
+"""Engine -> (case, overrides); "parquet": the soft case with its granule table as Parquet
+(parts held in memory until full or closed: a resumed run must not keep the part its stopped
+run wrote at close)."""
 
 
 def perga(*args: str) -> subprocess.CompletedProcess[str]:
@@ -82,6 +89,7 @@ def references(tmp_path_factory) -> dict[str, Path]:
         ("soft", signal.SIGKILL, 2),
         ("rigid", signal.SIGTERM, 3),
         ("soft", signal.SIGINT, 4),
+        ("parquet", signal.SIGTERM, 5),
     ],
 )
 def test_a_run_stopped_at_a_random_moment_resumes_to_the_same_bytes(
