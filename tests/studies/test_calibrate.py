@@ -74,7 +74,8 @@ def test_bayes_posterior_covers_known_values(tmp_path: Path) -> None:
     [
         ("rotor.rpmm,first_impact_restitution\n1,0.7\n", FITS, "rotor.rpmm: unknown key"),
         ("granules.placement.angle,bogus_metric\n0.3,0.7\n", FITS, "no metric column"),
-        ("granules.placement.angle,first_impact_restitution\n0.3,high\n", FITS, "not a finite number"),
+        ("granules.placement.angle,first_impact_restitution\n0.3,high\n", FITS,
+         "not a finite number"),
         ("granules.placement.angle,first_impact_restitution,first_impact_restitution_sd\n"
          "0.3,0.7,0\n", FITS, "first_impact_restitution_sd: must be a finite number > 0"),
         ("granules.placement.angle,first_impact_restitution\n9,0.7\n", FITS,
