@@ -9,6 +9,7 @@ are handled, so a signal during start-up is a clean stop too.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -103,8 +104,10 @@ def _schema(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     if (args.case is None) == (args.resume is None):
         return _problems(["perga run needs a CASE or --resume RUN (one of them)"])
-    if args.resume is not None and (args.set or args.output or args.overwrite):
-        return _problems(["--resume RUN goes on with the run as it was: no --set, -o, --overwrite"])
+    if args.resume is not None and (args.set or args.output or args.overwrite or args.start_from):
+        return _problems(
+            ["--resume RUN goes on with the run as it was: no --set, -o, --overwrite, --from"]
+        )
     with StopRequest() as stop:  # the imports and the case, never stopped halfway
         from tqdm import tqdm
 
@@ -122,6 +125,10 @@ def _run(args: argparse.Namespace) -> int:
             if not (args.resume / "case.toml").is_file():
                 return _problems([f"{args.resume} is not a perga run (it has no case.toml)"])
             case = load_case(args.resume / "case.toml")
+        elif args.start_from is not None:
+            problem, case = _case_from_run(args.case, args.set or [], args.start_from)
+            if problem:
+                return _problems([problem])
         else:
             case = load_case(args.case, overrides=args.set or ())
         stop.check()
@@ -162,7 +169,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.resume is not None:
             summary = resume_run(case, directory, progress)
         else:
-            summary = run_case(case, args.case, directory, progress)
+            summary = run_case(case, args.case, directory, progress, args.start_from or "")
     except CheckpointError as exc:
         bar.close()
         return _problems([f"cannot resume: {exc}"])
@@ -194,6 +201,46 @@ def _run(args: argparse.Namespace) -> int:
     for warning in summary.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     return 0
+
+
+def _case_from_run(case_path: Path, overrides: list[str], start_from: str):
+    """(a problem or "", the case) for ``perga run CASE --from RUN[:TIME]``: CASE with its
+    granules replaced by RUN's at that frame (:func:`perga.runner.granules_of_run`)."""
+    import numpy as np
+    from pydantic import ValidationError
+
+    from perga.case import CaseError, load_case
+    from perga.case.load import overridden, read_case_data
+    from perga.case.schema import Case
+    from perga.case.sizes import initial_radii
+    from perga.runner import RunStateError, granules_of_run
+
+    run, _, time = start_from.rpartition(":")
+    try:
+        at = float(time) if run else None
+    except ValueError:
+        run, at = start_from, None  # a ':' in the path, no time
+    run = run or start_from
+    if at is not None and not (math.isfinite(at) and at >= 0):
+        return f"--from {start_from}: the time must be a number of seconds >= 0", None
+    try:
+        taken, granules, radii = granules_of_run(Path(run), at)
+    except RunStateError as exc:
+        return f"--from {start_from}: {exc}", None
+    everything = [*overrides, *granules]
+    try:  # the sizes first, from the schema alone: a placement check would blame overlaps
+        given = initial_radii(
+            Case.model_validate(overridden(read_case_data(case_path), everything, case_path))
+        )
+    except (CaseError, ValidationError):
+        given = radii  # load_case names the problem
+    if not np.array_equal(given, radii):
+        return (
+            f"--from {start_from}: the run's granules at t = {taken} s have radii "
+            f"{radii.min():g}-{radii.max():g} m, {case_path} gives {given.min():g}-"
+            f"{given.max():g} m (granules.radius or granules.size): the sizes must be the same"
+        ), None
+    return "", load_case(case_path, overrides=everything)
 
 
 def _render(args: argparse.Namespace) -> int:
@@ -503,6 +550,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="go on with the stopped or killed run RUN from its newest checkpoint (no CASE)",
     )
     run.add_argument("-o", "--output", type=Path, help="run directory (default: output.directory)")
+    run.add_argument(
+        "--from",
+        dest="start_from",
+        metavar="RUN[:TIME]",
+        help="start CASE's granules where the run RUN had them at its last frame at or before "
+        "TIME s (default: its last): positions, velocities, spins; RUN's sizes must be CASE's",
+    )
     run.add_argument("--overwrite", action="store_true", help="replace an existing run directory")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument(

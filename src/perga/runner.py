@@ -27,10 +27,12 @@ import tomli_w
 from perga import checkpoints
 from perga.case.schema import Case
 from perga.engine.simulation import Simulation
+from perga.geometry.clearance import overlapping_pairs
 from perga.model.frame import Frame
 from perga.model.from_case import scene_spec
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
+from perga.output.tables import read_columns, table_path
 from perga.stopping import StopRequest, describe
 
 
@@ -44,6 +46,8 @@ class RunSummary:
 
     case: str
     overrides: list[str] = field(default_factory=list)
+    started_from: str = ""
+    """The run and time whose granules this run started from (perga run --from), if any."""
     status: str = "running"
     reason: str = ""
     steps: int = 0
@@ -75,11 +79,65 @@ def write_case_copy(case: Case, case_path: Path, destination: Path) -> None:
     if not case.overrides or case.source_data is None:
         shutil.copyfile(case_path, destination)
         return
-    header = "".join(f"# --set {o}\n" for o in case.overrides)
+    header = "".join(f"# --set {shown(o)}\n" for o in case.overrides)
     text = f"# {case_path} as run, with these overrides:\n{header}\n" + tomli_w.dumps(
         case.source_data, multiline_strings=True
     )
     destination.write_text(text, encoding="utf-8")
+
+
+class RunStateError(Exception):
+    """A run's state cannot be taken (``perga run --from``): the message says why."""
+
+
+def granules_of_run(run: Path, time: float | None = None) -> tuple[float, list[str], np.ndarray]:
+    """The granules of the run directory ``run`` at its last frame at or before ``time`` (s;
+    None: its last frame), as case overrides that start a case from them: (the frame's time,
+    ``granules.count`` and an explicit ``granules.placement`` with positions, velocities, spins
+    and the frame's largest overlap of two granules allowed, their radii, m). RunStateError if
+    the run has no granule table or no such frame."""
+    path = table_path(run, "granules")
+    if path is None:
+        raise RunStateError(f"{run} has no granule table (granules.csv or granules.parquet)")
+    try:
+        table = read_columns(path)
+    except (OSError, ValueError) as exc:
+        raise RunStateError(f"{path}: cannot read ({exc})") from None
+    times = table["time"]
+    chosen = times if time is None else times[times <= time * (1 + 1e-12)]
+    if chosen.size == 0:
+        raise RunStateError(f"{path}: no frame at or before t = {time} s")
+    rows = times == chosen.max()
+    x, y, vx, vy, spins = (
+        table[c][rows].tolist() for c in ("x", "y", "vx", "vy", "angular_velocity")
+    )  # Python floats: their repr is TOML
+    overlap = largest_overlap(np.column_stack((x, y)), table["radius"][rows])
+    placement = (
+        f'{{kind = "explicit", overlap = {overlap!r}, '
+        f"positions = [{', '.join(f'[{a!r}, {b!r}]' for a, b in zip(x, y, strict=True))}], "
+        f"velocities = [{', '.join(f'[{a!r}, {b!r}]' for a, b in zip(vx, vy, strict=True))}], "
+        f"angular_velocities = [{', '.join(repr(w) for w in spins)}]}}"
+    )
+    overrides = [f"granules.count={int(rows.sum())}", f"granules.placement={placement}"]
+    return float(chosen.max()), overrides, table["radius"][rows]
+
+
+def largest_overlap(positions: np.ndarray, radii: np.ndarray) -> float:
+    """The largest overlap of two of the discs, m (0 if none overlap)."""
+    pairs = overlapping_pairs(positions, radii)
+    if len(pairs) == 0:
+        return 0.0
+    gap = np.hypot(*(positions[pairs[:, 0]] - positions[pairs[:, 1]]).T)
+    return float(np.max(radii[pairs[:, 0]] + radii[pairs[:, 1]] - gap))
+
+
+def shown(override: str, most: int = 200) -> str:
+    """An override as listed in a run's case copy and summary: whole, or cut after ``most``
+    characters (an explicit placement of a run's granules, ``perga run --from``, is in the
+    case copy itself)."""
+    if len(override) <= most:
+        return override
+    return f"{override[: most // 2]}... ({len(override)} characters)"
 
 
 def prepare_directory(directory: Path, overwrite: bool) -> None:
@@ -133,14 +191,23 @@ Progress = Callable[[float, float, int], None]
 
 
 def run_case(
-    case: Case, case_path: Path, directory: Path, progress: Progress | None = None
+    case: Case,
+    case_path: Path,
+    directory: Path,
+    progress: Progress | None = None,
+    started_from: str = "",
 ) -> RunSummary:
     """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
     is also written to summary.json. A stop signal (:mod:`perga.stopping`; deferred to the end of
     the build or the next step boundary) and RunStoppedError are recorded in the summary and
     re-raised after everything written so far is flushed; a stop signal also leaves a
-    checkpoint to resume from (:func:`resume_run`)."""
-    summary = RunSummary(case=str(case_path.resolve()), overrides=list(case.overrides))
+    checkpoint to resume from (:func:`resume_run`). ``started_from``: where the granules
+    came from, for the summary (``perga run --from``)."""
+    summary = RunSummary(
+        case=str(case_path.resolve()),
+        overrides=[shown(o) for o in case.overrides],
+        started_from=started_from,
+    )
     start = time.perf_counter()
     run: _Run | None = None
     with StopRequest() as stop:

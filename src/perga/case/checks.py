@@ -158,13 +158,13 @@ def _granules(case: Case) -> list[str]:
                 f"granules.placement.positions: needs granules.count = {g.count} entries "
                 f"(got {len(placement.positions)})"
             )
-        if placement.velocities is not None and len(placement.velocities) != len(
-            placement.positions
-        ):
-            problems.append(
-                "granules.placement.velocities: needs one entry per position "
-                f"({len(placement.positions)}, got {len(placement.velocities)})"
-            )
+        for name in ("velocities", "angular_velocities"):
+            given = getattr(placement, name)
+            if given is not None and len(given) != len(placement.positions):
+                problems.append(
+                    f"granules.placement.{name}: needs one entry per position "
+                    f"({len(placement.positions)}, got {len(given)})"
+                )
     if isinstance(placement, ShotPlacement):
         problems += _shot(case, placement)
         if problems:
@@ -204,19 +204,27 @@ def _granules(case: Case) -> list[str]:
         )
         return problems
     positions, _ = initial_state(case)
-    return problems + _overlaps(case, positions, initial_radii(case))
+    radii = initial_radii(case)
+    allowed = placement.overlap if isinstance(placement, ExplicitPlacement) else 0.0
+    if not allowed < 0.5 * radii.min():
+        return [
+            *problems,
+            f"granules.placement.overlap: must be below half the smallest radius, "
+            f"{0.5 * radii.min():g} m (got {allowed:g})",
+        ]
+    return problems + _overlaps(case, positions, radii, allowed)
 
 
-def _overlaps(case: Case, positions: np.ndarray, radii: np.ndarray) -> list[str]:
-    """Granules overlapping the wall, a hammer or each other at t = 0 (a k-d tree: never all
-    pairs), at most five of each named."""
+def _overlaps(case: Case, positions: np.ndarray, radii: np.ndarray, allowed: float) -> list[str]:
+    """Granules overlapping the wall, a hammer or each other at t = 0 by more than ``allowed``
+    (m; a k-d tree: never all pairs), at most five of each named."""
     obstacles = initial_obstacles(case)
     hammers = Obstacles(obstacles.polygons)
     walls = Obstacles(container=obstacles.container, container_radius=obstacles.container_radius)
     problems = []
     for what, free in (
-        ("the wall", walls.clear(positions, radii)),
-        ("a hammer", hammers.clear(positions, radii)),
+        ("the wall", walls.clear(positions, radii - allowed)),
+        ("a hammer", hammers.clear(positions, radii - allowed)),
     ):
         bad = np.flatnonzero(~free)
         problems += [
@@ -226,11 +234,11 @@ def _overlaps(case: Case, positions: np.ndarray, radii: np.ndarray) -> list[str]
         ]
         if len(bad) > 5:
             problems.append(f"granules.placement: ... and {len(bad) - 5} more overlap {what}")
-    pairs = overlapping_pairs(positions, radii)
+    pairs = overlapping_pairs(positions, radii - 0.5 * allowed)
     problems += [
         f"granules.placement: granules {a} and {b} overlap (centres "
         f"{np.hypot(*(positions[a] - positions[b])):.4g} m apart, need >= "
-        f"{radii[a] + radii[b]:g} m)"
+        f"{radii[a] + radii[b] - allowed:g} m)"
         for a, b in pairs[:5]
     ]
     if len(pairs) > 5:

@@ -133,8 +133,11 @@ def held(case: Case) -> bool:
 
 
 def initial_spins(case: Case) -> FloatArray:
-    """Every granule's angular velocity at t = 0, rad/s: a shot's spin, else 0."""
+    """Every granule's angular velocity at t = 0, rad/s: a shot's spin, an explicit
+    placement's, else 0."""
     placement = case.granules.placement
+    if isinstance(placement, ExplicitPlacement) and placement.angular_velocities is not None:
+        return np.array(placement.angular_velocities, dtype=float)
     spin = placement.spin if isinstance(placement, ShotPlacement) else 0.0
     return np.full(case.granules.count, spin)
 

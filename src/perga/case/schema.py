@@ -247,7 +247,8 @@ class Hammers(Strict):
 
 
 class ExplicitPlacement(Strict):
-    """[granules.placement] kind = "explicit": every granule's position (and velocity)."""
+    """[granules.placement] kind = "explicit": every granule's position (and velocity and
+    spin; perga run --from RUN writes one from a run's frame)."""
 
     kind: Literal["explicit"]
     positions: list[tuple[float, float]] = Field(
@@ -255,6 +256,17 @@ class ExplicitPlacement(Strict):
     )
     velocities: list[tuple[float, float]] | None = Field(
         None, description="velocity of each granule, m/s; default: at rest"
+    )
+    angular_velocities: list[float] | None = Field(
+        None, description="angular velocity of each granule, rad/s; default: not spinning"
+    )
+    overlap: float = Field(
+        0.0,
+        ge=0.0,
+        le=0.01,
+        description="largest overlap allowed at the start, m, in [0, 0.01] and below half the "
+        "smallest radius: of two granules, or of a granule with the wall or a hammer (a "
+        "settled bed's resting contacts; perga run --from sets its run's largest)",
     )
 
 
