@@ -100,17 +100,20 @@ def main() -> None:
         "--trials", type=int, default=20, help="stopped and resumed runs per signal and engine"
     )
     parser.add_argument("--seed", type=int, default=15)
+    parser.add_argument("--engines", nargs="+", choices=list(CASES), default=list(CASES))
     args = parser.parse_args()
     rng = random.Random(args.seed)
     print(f"load average at start: {os.getloadavg()[0]:.2f}; {args.trials} trials each")
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
-        for engine, (case, sets) in CASES.items():
-            reference = root / f"{engine}-reference"
-            proc = subprocess.Popen(command(case, reference, sets))
-            start = first_checkpoint(reference, proc)
-            assert proc.wait() == 0
-            span = time.monotonic() - start  # from the first checkpoint to the end
+        for engine in args.engines:
+            case, sets = CASES[engine]
+            for warm in (True, False):  # the first run fills numba's cache (compiling)
+                reference = root / f"{engine}-reference-{warm}"
+                proc = subprocess.Popen(command(case, reference, sets))
+                start = first_checkpoint(reference, proc)
+                assert proc.wait() == 0
+                span = time.monotonic() - start  # from the first checkpoint to the end
             for signum in SIGNALS:
                 outcomes: Counter[str] = Counter()
                 for k in range(3 * args.trials):  # until --trials stopped runs were resumed

@@ -29,10 +29,13 @@ before it.
 
 from __future__ import annotations
 
+import gc
 import hashlib
 import io
 import os
 import pickle
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import perga
@@ -90,21 +93,35 @@ class _RunUnpickler(pickle.Unpickler):
         return self.run / str(pid)
 
 
+@contextmanager
+def _no_collection() -> Iterator[None]:
+    """Python's cyclic garbage collector held off: (un)pickling makes many objects, and the
+    collections they trigger cost more than the pickling (0.1 s of a 0.13 s read, measured)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
 def dump(sim: Simulation, handed_over: dict[str, object], run: Path, case: str) -> bytes:
     """A checkpoint of ``sim`` (now, between steps) and ``handed_over`` (the runner's state, its
     paths taken relative to the run directory ``run``) for the case whose digest is ``case``,
     as the bytes of its file."""
     runner = io.BytesIO()
-    _RunPickler(runner, run).dump(handed_over)
-    body = pickle.dumps(
-        {
-            "case": case,
-            "sim": sim,
-            "chipmunk": capture(sim.machine.space),
-            "runner": runner.getvalue(),
-        },
-        protocol=pickle.HIGHEST_PROTOCOL,
-    )
+    with _no_collection():
+        _RunPickler(runner, run).dump(handed_over)
+        body = pickle.dumps(
+            {
+                "case": case,
+                "sim": sim,
+                "chipmunk": capture(sim.machine.space),
+                "runner": runner.getvalue(),
+            },
+            protocol=pickle.HIGHEST_PROTOCOL,
+        )
     return f"{FORMAT} {code_version()} {hashlib.sha256(body).hexdigest()}\n".encode() + body
 
 
@@ -150,7 +167,8 @@ def read(data: bytes, name: str = "checkpoint") -> tuple[Simulation, dict[str, o
         raise CheckpointError(f"{name}: damaged (its digest does not match)")
     if version != code_version():
         raise CheckpointError(f"{name}: written by perga {version}, this is {code_version()}")
-    state = pickle.loads(body)
+    with _no_collection():
+        state = pickle.loads(body)
     sim = state.pop("sim")
     restore(sim.machine.space, state.pop("chipmunk"))
     return sim, state
