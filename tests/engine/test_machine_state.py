@@ -9,6 +9,7 @@ import pymunk
 import pytest
 
 from perga.engine import Simulation
+from perga.engine.chipmunk_state import JointImpulses
 from perga.engine.effects import ConstraintLosses, HingeFriction, SwingStops
 from perga.model import DriveSpec, EffectsSpec, RotorSpec, SceneSpec
 
@@ -77,7 +78,8 @@ def test_loads_land_on_the_bodies_and_nowhere_else() -> None:
 
 class _Callbacks:
     """The losses as Chipmunk's constraint callbacks see them (the former implementation):
-    |j|·|mean of the relative angular velocity in pre_solve and post_solve|, summed."""
+    −j·(mean of the relative angular velocity in pre_solve and post_solve), j the signed
+    impulse on b, summed."""
 
     def __init__(self, constraints: list[pymunk.Constraint]) -> None:
         self.removed = 0.0
@@ -94,7 +96,8 @@ class _Callbacks:
         self._before[c] = self._relative(c)
 
     def _post(self, c: pymunk.Constraint, _space: pymunk.Space) -> None:
-        self.removed += c.impulse * abs(0.5 * (self._before[c] + self._relative(c)))
+        (j,) = JointImpulses([c]).read()  # signed; pymunk's impulse is |j|
+        self.removed -= j * 0.5 * (self._before[c] + self._relative(c))
 
 
 @pytest.mark.parametrize("kind", [HingeFriction, SwingStops])

@@ -135,3 +135,27 @@ def restore(space: pymunk.Space, state: ChipmunkState) -> None:
             raw[first + k] = next(values)
     if next(values, None) is not None:
         raise ValueError("the state holds more joint impulses than the space has joints")
+
+
+class JointImpulses:
+    """The accumulated impulses of joints (jAcc: a PivotJoint's J, (x, y), applied +J to its
+    body b and −J to a; a SimpleMotor's or RotaryLimitJoint's angular j, +j on b), read raw
+    after every step: the layout is checked at the first read, then each read is one or two
+    doubles a joint. Pickled as the joints alone (the pointers are taken again)."""
+
+    def __init__(self, joints: list[pymunk.Constraint]) -> None:
+        self.joints = joints
+        self._raw: list[tuple[object, int, int]] | None = None
+
+    def __getstate__(self) -> dict[str, object]:
+        return {"joints": self.joints}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._raw = None
+
+    def read(self) -> NDArray[np.float64]:
+        """Every joint's jAcc, one after the other (two doubles for a pivot), internal units."""
+        if self._raw is None:
+            self._raw = [(_doubles(j._constraint), *_joint_layout(j)) for j in self.joints]
+        return np.array([raw[first + k] for raw, first, length in self._raw for k in range(length)])

@@ -35,6 +35,7 @@ import pymunk
 from numpy.typing import NDArray
 
 from perga.engine import units as u
+from perga.engine.chipmunk_state import JointImpulses
 from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
@@ -163,8 +164,9 @@ class Drive(Effect):
 
 class ConstraintLosses(Effect):
     """An effect whose constraints act on the relative rotation of two bodies, removing per step
-    |j|·|ω̄_rel|: the constraint's angular impulse in the step times the mean of the relative
-    angular velocity before and after the step (exact for one impulse on a pair of bodies).
+    −j·ω̄_rel: the constraint's signed angular impulse on b in the step times the mean of the
+    relative angular velocity ω_b − ω_a before and after the step (exact for one impulse on a
+    pair of bodies).
 
     No Chipmunk callback: the energy meter hands the machine's states before and after the step
     to :meth:`account` (:mod:`perga.engine.energy`), which equal what a constraint's
@@ -177,17 +179,22 @@ class ConstraintLosses(Effect):
         super().__init__()
         self._machine = machine
         self._watched: list[tuple[pymunk.Constraint, int, int]] = []
+        self._impulses: JointImpulses | None = None
 
     def _watch(self, constraint: pymunk.Constraint) -> None:
         m = self._machine
         self._watched.append((constraint, m.row_of(constraint.a), m.row_of(constraint.b)))
 
     def account(self, before: MachineState, after: MachineState) -> None:
-        """Add the step's losses (internal units) from the states at its start and end."""
+        """Add the step's losses (internal units) from the states at its start and end: −j·ω̄_rel
+        with j the constraint's signed angular impulse on b (read raw: pymunk gives only |j|),
+        so that work a constraint's position correction puts in counts as a negative loss."""
+        if self._impulses is None or len(self._impulses.joints) != len(self._watched):
+            self._impulses = JointImpulses([c for c, _, _ in self._watched])
         w0, w1 = before.omega.tolist(), after.omega.tolist()
-        for constraint, a, b in self._watched:
+        for j, (_, a, b) in zip(self._impulses.read().tolist(), self._watched, strict=True):
             mean = 0.5 * ((w0[b] - w0[a]) + (w1[b] - w1[a]))
-            self._removed += constraint.impulse * abs(mean)
+            self._removed -= j * mean
 
 
 @_register

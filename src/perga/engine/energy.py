@@ -27,9 +27,16 @@ The terms:
 * ``contact_dissipation``: the contact model's, plus the swing stops' losses.
 * ``friction``, ``drag``: what the effects removed (:mod:`perga.engine.effects`).
 * ``gravity_work``: the potential energy released by in-plane gravity, Σ m g·Δr_cg.
-* ``closure`` = (drive_work + gravity_work − ΔKE − Δelastic − contact_dissipation − friction −
-  drag) / max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|, ½Σ_i|ΔKE_i|, 1e-30 J): the joints'
-  error correction, the first-order split of the kicks and rounding, nothing else. The term
+* ``joint_correction``: the work the hinge pins' position correction did, Σ J·(v̄_hammer −
+  v̄_rotor) at each hinge per step (:func:`_pivot_work`; J the pin's impulse, read raw through
+  :class:`~perga.engine.chipmunk_state.JointImpulses`): an ideal pin does none; Chipmunk's
+  pulls the drifting anchors together and does, first order in dt. Unbooked, it was the whole
+  residual before a run's first impact (docs/reliability.md).
+* ``closure`` = (drive_work + gravity_work + joint_correction − ΔKE − Δelastic −
+  contact_dissipation − friction − drag) / max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|,
+  ½Σ_i|ΔKE_i|, 1e-30 J): a driven rotor's axis pin's error correction, the first-order split of
+  the kicks and rounding, nothing else (the swing stops' and hinge friction's work is booked
+  signed by their effects, :class:`~perga.engine.effects.ConstraintLosses`). The term
   ½Σ_i|ΔKE_i| (kinetic energy moved between bodies) keeps the closure meaningful where nothing
   is driven or lost, e.g. an elastic free impact (ΔKE = 0).
 
@@ -41,11 +48,14 @@ constraint's impulse; a loop over all bodies only when :meth:`EnergyMeter.terms`
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 import pymunk
 
 from perga.engine import units as u
+from perga.engine.chipmunk_state import JointImpulses
 from perga.engine.effects import ConstraintLosses
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
@@ -86,6 +96,15 @@ class EnergyMeter:
         self._kinetics0 = [_kinetic(b) for b in self._bodies]
         self._centres0 = [_centre(b) for b in self._bodies]
         self._drive = 0.0
+        self._hinges = JointImpulses(list(machine.hinges))
+        self._hinge_rows = np.array(
+            [(machine.row_of(j.a), machine.row_of(j.b)) for j in machine.hinges], dtype=np.int64
+        ).reshape(-1, 2)
+        self._hinge_arms = np.array(
+            [tuple(j.anchor_b - j.b.center_of_gravity) for j in machine.hinges], dtype=float
+        ).reshape(-1, 2)
+        """Each hinge's anchor on its hammer from the hammer's centre of gravity, body frame."""
+        self._correction = 0.0
         self._before: MachineState | None = None
 
     def before_step(self, state: MachineState) -> None:
@@ -102,6 +121,14 @@ class EnergyMeter:
         assert before is not None, "after_step without before_step"
         for effect in self._constraints:
             effect.account(before, state)
+        if self._hinge_rows.size:
+            self._correction += _pivot_work(
+                before.table,
+                state.table,
+                self._hinge_rows,
+                self._hinge_arms,
+                self._hinges.read().reshape(-1, 2),
+            )
         if not self._needs_balance:
             return
         gx, gy = self._gravity
@@ -134,6 +161,7 @@ class EnergyMeter:
             contact_dissipation=terms["contact"],
             friction=terms["friction"],
             drag=terms["drag"],
+            joint_correction=self._correction * u.ENERGY,
         )
 
 
@@ -157,4 +185,32 @@ def _moment_change(
         dvy = after[k, 4] - before[k, 4] - gy_dt
         total += mass[j] * (after[k, 0] * dvy - after[k, 1] * dvx)
         total += moment[j] * (after[k, 5] - before[k, 5])
+    return total
+
+
+@numba.njit(cache=True)
+def _pivot_work(
+    before: np.ndarray, after: np.ndarray, rows: np.ndarray, arms: np.ndarray, impulses: np.ndarray
+) -> float:
+    """Σ J·(v̄_b − v̄_a) over pivot joints: the work their position correction did in a step
+    (an ideal pin does none). Joint k joins the bodies at ``rows[k]`` = (a, b) of two
+    machine-state tables; J = ``impulses[k]`` acts on b at its anchor, ``arms[k]`` from b's
+    centre of gravity in b's frame; v̄ is each body's velocity at that point, the mean of before
+    and after the step, at the lever arm of the step's new positions (where Chipmunk applies
+    the impulse)."""
+    total = 0.0
+    for k in range(rows.shape[0]):
+        a, b = rows[k, 0], rows[k, 1]
+        cos, sin = math.cos(after[b, 2]), math.sin(after[b, 2])
+        rbx = cos * arms[k, 0] - sin * arms[k, 1]
+        rby = sin * arms[k, 0] + cos * arms[k, 1]
+        rax = after[b, 0] + rbx - after[a, 0]
+        ray = after[b, 1] + rby - after[a, 1]
+        wb = 0.5 * (before[b, 5] + after[b, 5])
+        wa = 0.5 * (before[a, 5] + after[a, 5])
+        vbx = 0.5 * (before[b, 3] + after[b, 3]) - wb * rby
+        vby = 0.5 * (before[b, 4] + after[b, 4]) + wb * rbx
+        vax = 0.5 * (before[a, 3] + after[a, 3]) - wa * ray
+        vay = 0.5 * (before[a, 4] + after[a, 4]) + wa * rax
+        total += impulses[k, 0] * (vbx - vax) + impulses[k, 1] * (vby - vay)
     return total

@@ -128,8 +128,8 @@ class EnergyLedger:
     drag: float
     """Energy removed by air drag."""
     closure: float
-    """(drive + gravity + inflow − outflow − ΔKE − Δelastic − contact − friction − drag) /
-    energy scale."""
+    """(drive + gravity + joint correction + inflow − outflow − ΔKE − Δelastic − contact −
+    friction − drag) / energy scale."""
     elastic: float = 0.0
     """Energy stored in soft contacts now (0 with rigid contacts)."""
     elastic_initial: float = 0.0
@@ -138,6 +138,9 @@ class EnergyLedger:
     """Energy brought in by granules fed into the chamber (their kinetic energy)."""
     outflow: float = 0.0
     """Energy taken out by granules removed (kinetic and stored elastic energy)."""
+    joint_correction: float = 0.0
+    """Work the hinge pins' position correction did (numerical: an ideal pin does none; first
+    order in dt)."""
 
 
 @dataclass(frozen=True)
@@ -158,6 +161,7 @@ class LedgerTerms:
     elastic_initial: float = 0.0
     inflow: float = 0.0
     outflow: float = 0.0
+    joint_correction: float = 0.0
 
     def __add__(self, other: LedgerTerms) -> LedgerTerms:
         return LedgerTerms(
@@ -171,6 +175,7 @@ class LedgerTerms:
         residual = (
             self.drive_work
             + self.gravity_work
+            + self.joint_correction
             + self.inflow
             - self.outflow
             - change
@@ -200,4 +205,5 @@ class LedgerTerms:
             elastic_initial=self.elastic_initial,
             inflow=self.inflow,
             outflow=self.outflow,
+            joint_correction=self.joint_correction,
         )

@@ -221,6 +221,7 @@ class EnergyRecorder(TableRecorder):
         "drag",
         "inflow",
         "outflow",
+        "joint_correction",
         "closure",
     )
 
@@ -234,7 +235,7 @@ class EnergyRecorder(TableRecorder):
             raise ValueError("energy.csv needs frames with the energy ledger (track_energy)")
         self.table.write(
             [(frame.time, e.kinetic, e.drive_work, e.contact_dissipation, e.friction, e.drag,
-              e.inflow, e.outflow, e.closure)]
+              e.inflow, e.outflow, e.joint_correction, e.closure)]
         )  # fmt: skip
 
 
