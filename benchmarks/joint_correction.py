@@ -19,12 +19,9 @@ import pymunk
 
 from perga.case import load_case
 from perga.engine import units as u
-from perga.engine.chipmunk_state import _doubles
+from perga.engine.chipmunk_state import JointImpulses
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
-
-J_ACC = 25
-"""Index of a PivotJoint's jAcc among its doubles (perga.engine.chipmunk_state)."""
 
 
 def mean_anchor_velocity(body: pymunk.Body, local: pymunk.Vec2d, v0, w0) -> pymunk.Vec2d:
@@ -43,14 +40,16 @@ def main() -> None:
     case = load_case(Path("cases") / f"{args.case}.toml", overrides=args.overrides)
     sim = Simulation(scene_spec(case))
     pivots = [c for c in sim.machine.space.constraints if isinstance(c, pymunk.PivotJoint)]
+    impulses = JointImpulses(pivots)
     work = at_b = 0.0
     for _ in range(round(args.duration / sim.dt)):
         before = [(c.a.velocity, c.a.angular_velocity, c.b.velocity, c.b.angular_velocity)
                   for c in pivots]  # fmt: skip
         sim.step()
-        for c, (va, wa, vb, wb) in zip(pivots, before, strict=True):
-            raw = _doubles(c._constraint)
-            impulse = pymunk.Vec2d(raw[J_ACC], raw[J_ACC + 1])
+        for c, (va, wa, vb, wb), j in zip(
+            pivots, before, impulses.read().reshape(-1, 2), strict=True
+        ):
+            impulse = pymunk.Vec2d(*j)
             relative = mean_anchor_velocity(c.b, c.anchor_b, vb, wb) - mean_anchor_velocity(
                 c.a, c.anchor_a, va, wa
             )
@@ -66,6 +65,7 @@ def main() -> None:
                 - e.contact_dissipation - e.friction - e.drag)  # fmt: skip
     joints, joints_b = work * u.ENERGY, at_b * u.ENERGY
     print(f"{args.case} {' '.join(args.overrides)} t = {args.duration} s: ledger residual "
+          "without its joint_correction term "
           f"{residual:.5g} J (closure {e.closure:+.2%}); the pivots' correction work "
           f"{joints:.5g} J (residual + it: {residual + joints:.3g} J); measured against the "
           f"rotor at the hammer's anchor {joints_b:.5g} J (residual + it: "

@@ -36,6 +36,7 @@ import os
 import pickle
 from collections.abc import Iterator
 from contextlib import contextmanager
+from functools import cache
 from pathlib import Path
 
 import perga
@@ -48,9 +49,11 @@ KEEP = 2
 """Checkpoints kept: the newest and the one before it."""
 
 
+@cache
 def code_version() -> str:
     """perga's version and a digest of its source files: a checkpoint is read only by the code
-    that wrote it (a pickle holds its classes by name, and their fields may change)."""
+    that wrote it (a pickle holds its classes by name, and their fields may change). Taken once
+    a process: the sources do not change under a running perga."""
     root = Path(perga.__file__).parent
     digest = hashlib.sha256()
     for source in sorted(root.rglob("*.py")):

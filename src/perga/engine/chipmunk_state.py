@@ -26,7 +26,7 @@ from pymunk._chipmunk import ffi
 # 0 velocity_func, 1 position_func, 2 m, 3 m_inv, 4 i, 5 i_inv, 6-7 cog, 8-9 p, 10-11 v,
 # 12-13 f, 14 a, 15 w, 16 t, 17-22 transform (a b c d tx ty)
 _BODY = slice(2, 23)
-_M, _I, _COG, _P, _V, _A, _W, _TX = 2, 4, 6, 8, 10, 14, 15, 21
+_M, _I, _COG, _V, _A, _W, _TX = 2, 4, 6, 10, 14, 15, 21
 # cpConstraint is 13 doubles (6 pointers, maxForce, errorBias, maxBias, cpBool padded, 3
 # pointers); each joint's own fields follow it
 _MAX_FORCE = 6

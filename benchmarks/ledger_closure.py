@@ -1,0 +1,46 @@
+"""Issue 15, item 2: the energy ledger's closure of every bundled case with a chamber at 1 ms,
+10 ms and the case's end (its own duration), with the kinetic energy at the start and now, the
+drive's work and the contacts' dissipation (J) that it is judged against; and the joints'
+correction work booked (``joint_correction``).
+
+    python benchmarks/ledger_closure.py                    # every bundled case, ~4 min
+    python benchmarks/ledger_closure.py separator vertical-rotor
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from perga.case import load_case
+from perga.engine.simulation import Simulation
+from perga.model.from_case import scene_spec
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("cases", nargs="*", help="bundled cases by name (default: all)")
+    args = parser.parse_args()
+    names = args.cases or [p.stem for p in sorted(Path("cases").glob("*.toml"))]
+    for name in names:
+        case = load_case(Path("cases") / f"{name}.toml")
+        if case.chamber is None:
+            continue  # a parameter set, not a scene
+        sim = Simulation(scene_spec(case))
+        rows = []
+        with sim.contacts.running():
+            for t in (0.001, 0.01, case.solver.duration):
+                if t > case.solver.duration + 1e-12:
+                    continue
+                sim.run(t - sim.time)
+                e = sim.energy()
+                rows.append(
+                    f"t = {t:g} s: {e.closure:+.2%} (KE {e.kinetic_initial:.3g} -> "
+                    f"{e.kinetic:.3g} J, drive {e.drive_work:.3g} J, contacts "
+                    f"{e.contact_dissipation:.3g} J, joints {e.joint_correction:.3g} J)"
+                )
+        print(f"{name}: " + " | ".join(rows), flush=True)
+
+
+if __name__ == "__main__":
+    main()
