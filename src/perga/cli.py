@@ -1,6 +1,7 @@
 """The ``perga`` command line: parses, calls the library, prints.
 
 Exit codes: 0 success, 2 bad input (the problems are printed, never a traceback), 1 a failed run,
+3 a run that reached its end with its energy ledger off (beyond ``solver.ledger_tolerance``),
 128 + the signal's number after a stop signal (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP;
 :mod:`perga.stopping`). Everything heavy is imported inside the commands, after the stop signals
 are handled, so a signal during start-up is a clean stop too.
@@ -114,6 +115,7 @@ def _run(args: argparse.Namespace) -> int:
         from perga.case import load_case
         from perga.checkpoints import CheckpointError
         from perga.runner import (
+            LEDGER_OFF,
             RunStoppedError,
             check_resumable,
             prepare_directory,
@@ -188,8 +190,11 @@ def _run(args: argparse.Namespace) -> int:
               f"{directory} (summary.json says where it stopped)", file=sys.stderr)  # fmt: skip
         return 1
     bar.close()
+    status = summary.status
+    if status == LEDGER_OFF:
+        status = f"completed, ledger off by {summary.energy['closure']:+.2%}"
     print(
-        f"{summary.status}: {summary.steps} steps, {summary.simulated_time:.4g} s simulated in "
+        f"{status}: {summary.steps} steps, {summary.simulated_time:.4g} s simulated in "
         f"{summary.wall_time:.3g} s, {summary.impacts} impacts -> {directory}"
     )
     pop = summary.population
@@ -200,6 +205,9 @@ def _run(args: argparse.Namespace) -> int:
         )
     for warning in summary.warnings:
         print(f"warning: {warning}", file=sys.stderr)
+    if summary.status == LEDGER_OFF:
+        print(f"error: {summary.reason}", file=sys.stderr)
+        return 3
     return 0
 
 

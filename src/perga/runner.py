@@ -5,8 +5,8 @@ stepped at its machine step; after every step the phase-locked frame clock decid
 simulation's frame goes to the recorders (so the last frame is always written at the end). The
 run directory holds the case file as run, ``scene.json`` (the system's geometry), one CSV per
 recorder (flushed as written), and ``summary.json``, which is written whatever happens:
-completed, interrupted (Ctrl-C) or failed (NaN, a granule that left the chamber, an error),
-with the reason.
+completed (or completed with its energy ledger off), interrupted (Ctrl-C) or failed (NaN, a
+granule that left the chamber, an error), with the reason.
 """
 
 from __future__ import annotations
@@ -34,6 +34,13 @@ from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
 from perga.output.tables import read_columns, table_path
 from perga.stopping import StopRequest, describe
+
+COMPLETED = "completed"
+LEDGER_OFF = "completed, ledger off"
+"""The status of a run that reached its end with its energy ledger's closure beyond
+``solver.ledger_tolerance``: its results are all there, but not to be trusted as they are."""
+FINISHED = (COMPLETED, LEDGER_OFF)
+"""The statuses of a run that reached its end (nothing to resume)."""
 
 
 class RunStoppedError(Exception):
@@ -278,8 +285,8 @@ def check_resumable(directory: Path) -> None:
         status = json.loads(summary.read_text()).get("status") if summary.is_file() else None
     except (OSError, ValueError, AttributeError):
         status = None
-    if status == "completed":
-        raise checkpoints.CheckpointError(f"{directory} completed: there is nothing to resume")
+    if status in FINISHED:
+        raise checkpoints.CheckpointError(f"{directory} {status}: there is nothing to resume")
 
 
 def case_digest(directory: Path) -> str:
@@ -332,6 +339,8 @@ class _Run:
         self.last_written = -math.inf
         """When the last checkpoint file was written (time.perf_counter), s."""
         self.case_digest = case_digest(directory)
+        self.ledger_tolerance = case.solver.ledger_tolerance
+        self.remedy = _smaller_steps(case)
 
     def write_frame(self, summary: RunSummary) -> None:
         """The simulation's frame, checked, to every recorder."""
@@ -379,15 +388,21 @@ class _Run:
                 if not last and self.grid is not None and self.grid.due(sim.time):
                     write = time.perf_counter() - self.last_written >= self.every_wall
                     self.checkpoint(summary, start, write)
-            summary.status = "completed"
+            summary.status = COMPLETED
 
 
 def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path) -> None:
-    """Close the recorders and write summary.json (whole, by a rename)."""
+    """Judge the ledger of a completed run, close the recorders and write summary.json (whole,
+    by a rename)."""
     sim = None if run is None else run.sim
+    if run is not None and run.sim.meter is not None:
+        ledger = run.sim.energy()
+        summary.energy = asdict(ledger)
+        if summary.status == COMPLETED:
+            judge_ledger(summary, ledger.closure, run.ledger_tolerance, run.remedy)
     for recorder in [] if run is None else run.recorders:
         try:
-            recorder.close(complete=summary.status == "completed")
+            recorder.close(complete=summary.status in FINISHED)
         except Exception as exc:  # summary.json must still be written
             summary.warnings.append(f"{type(recorder).__name__}.close failed: {exc}")
     summary.wall_time = wall
@@ -413,15 +428,37 @@ def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path)
                 "removed_broken": frame.removed_broken,
                 "present": len(frame.granules.ids),
             }
-        if sim.meter is not None:
-            summary.energy = asdict(sim.energy())
-            closure = summary.energy.get("closure", 0.0)
-            if abs(closure) > 0.01:
-                summary.warnings.append(f"energy ledger closes to {closure:.2%} only (> 1 %)")
     text = json.dumps(_finite_or_null(asdict(summary)), indent=2, allow_nan=False) + "\n"
     temporary = directory / ".summary.json.tmp"  # written whole, then renamed over the old one
     temporary.write_text(text)
     temporary.replace(directory / "summary.json")
+
+
+def _smaller_steps(case: Case) -> str:
+    """How to take smaller steps in ``case``: the remedy for a ledger that does not close."""
+    model = case.contact_model
+    if not model.soft:
+        return "take smaller steps (solver.dt, or solver.substeps)"
+    if model.granule_substeps > 1:
+        return (
+            "take smaller machine steps (contact_model.granule_substeps = 1: the hammers keep "
+            "their velocity through the granules' substeps, and that split's error grows with "
+            "how hard they are stopped)"
+        )
+    return "take smaller steps (contact_model.steps_per_contact, or solver.dt)"
+
+
+def judge_ledger(summary: RunSummary, closure: float, tolerance: float, remedy: str) -> None:
+    """A completed run whose ledger closes beyond ``tolerance`` (or not at all: NaN) becomes
+    :data:`LEDGER_OFF`, its reason saying by how much and what to do (``remedy``)."""
+    if abs(closure) <= tolerance:
+        return
+    summary.status = LEDGER_OFF
+    summary.reason = (
+        f"the energy ledger closes to {closure:+.2%}, beyond solver.ledger_tolerance = "
+        f"{tolerance:.3g} ({tolerance:.2%}): {remedy}; or, the cause known, accept it with a "
+        "larger solver.ledger_tolerance"
+    )
 
 
 def _finite_or_null(value: object) -> object:

@@ -16,6 +16,7 @@ from perga.stats.metrics import MetricUnavailableError, evaluate
 from perga.stats.tables import load_run
 from perga.studies.window import (
     METRICS,
+    RELEASE,
     Point,
     aggregate,
     best_point,
@@ -163,16 +164,18 @@ def test_unavailable_metrics_say_why(
         evaluate(run, metric)
 
 
-@pytest.mark.parametrize(("closures", "note"), [
-    ([0.0099, -0.01], None),
-    ([0.0099, -0.0101], "1 of 2 runs' energy ledger misses 1 % (worst -1.01%)"),
-    ([0.02, -0.051], "2 of 2 runs' energy ledger misses 1 % (worst -5.10%)"),
-])  # fmt: skip
-def test_points_name_runs_whose_ledger_missed(closures, note) -> None:
-    """The runner's 1 % threshold, on both sides; the worst closure is quoted."""
-    rows = [{"a": 1.0, "b": 2.0, "status": "ok", "ledger_closure": c} for c in closures]
+def test_runs_whose_ledger_is_off_count_as_failed_with_their_reason() -> None:
+    """A run the runner judged "completed, ledger off" is left out of its point's means and
+    counted as failed; its reason is among the point's notes."""
+    reason = "the energy ledger closes to -1.20 %, beyond solver.ledger_tolerance = 0.01"
+    rows = [
+        {"a": 1.0, "b": 2.0, "status": "ok", RELEASE: 0.5, "ledger_closure": 0.002},
+        {"a": 1.0, "b": 2.0, "status": "completed, ledger off", "reason": reason,
+         RELEASE: 0.9, "ledger_closure": -0.012},
+    ]  # fmt: skip
     (point,) = aggregate(rows, ("a", "b"), ([1.0], [2.0]))
-    assert point.notes == ([] if note is None else [note])
+    assert (point.runs, point.failed, point.mean[RELEASE]) == (2, 1, 0.5)
+    assert point.notes == [reason]
 
 
 def _point(x: float, y: float, release: float, damage: float, through: float, energy: float,

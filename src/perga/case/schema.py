@@ -585,6 +585,14 @@ class Solver(Strict):
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
     duration: float = Field(0.1, ge=1e-6, le=3600, description="simulated time, s, in [1e-6, 3600]")
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
+    ledger_tolerance: float = Field(
+        0.01,
+        ge=1e-6,
+        le=1.0,
+        description="the largest |closure| of the energy ledger at the end (a fraction: 0.01 "
+        "is 1 %) with which a run counts as completed, in [1e-6, 1]; beyond it the run ends "
+        "'completed, ledger off' with exit status 3 (perga.engine.energy)",
+    )
     threads: int | Literal["auto"] = Field(
         "auto",
         description="threads of the soft contact kernel, in [1, 256]: its pair forces are "

@@ -19,6 +19,7 @@ says by how much and why). Runs are recognised by their case:
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Iterable, Sequence
@@ -725,7 +726,7 @@ def _blade_jobs(path: Path) -> list[Job]:
 
 def _run_job(job: Job, work: Path) -> Path:
     """Write the job's case and run it into work/runs/NAME (reused if completed already)."""
-    from perga.runner import prepare_directory, run_case
+    from perga.runner import FINISHED, prepare_directory, run_case
 
     case_path = work / "cases" / f"{job.name}.toml"
     directory = work / "runs" / job.name
@@ -734,7 +735,7 @@ def _run_job(job: Job, work: Path) -> Path:
         case_path.exists()
         and case_path.read_text(encoding="utf-8") == job.text
         and summary.exists()
-        and '"status": "completed"' in summary.read_text(encoding="utf-8")
+        and json.loads(summary.read_text(encoding="utf-8")).get("status") in FINISHED
     ):
         return directory
     case_path.parent.mkdir(parents=True, exist_ok=True)

@@ -32,9 +32,8 @@ METRICS = ("released_fraction", "damaged_fraction", "throughput", "energy_per_kg
 """The window's metrics, in their order in the table."""
 RELEASE, DAMAGE, THROUGHPUT, ENERGY = METRICS
 LEDGER = "ledger_closure"
-"""Also kept per run: a run whose energy ledger misses ``LEDGER_TOLERANCE`` is named in its
-point's notes (the runner's own threshold)."""
-LEDGER_TOLERANCE = 0.01
+"""Also kept per run (a run whose ledger misses its case's tolerance is not "ok": the runner's
+status "completed, ledger off", with its reason among its point's notes)."""
 SPEED_KEYS = ("rotor.rpm", "rotor.omega")
 """Keys whose axis is the speed axis of the trend checks."""
 TABLE = "window.parquet"
@@ -142,13 +141,6 @@ def aggregate(
             mean[m], sd[m], count[m] = _stats([_float(r.get(m)) for r in ok])
         notes = sorted({str(r.get("notes")) for r in ok if r.get("notes")})
         notes += sorted({str(r.get("reason")) for r in cell if r.get("status") != "ok"})
-        closures = [c for c in (_float(r.get(LEDGER)) for r in ok) if math.isfinite(c)]
-        missed = [c for c in closures if abs(c) > LEDGER_TOLERANCE]
-        if missed:
-            worst = max(missed, key=abs)
-            notes.append(
-                f"{len(missed)} of {len(ok)} runs' energy ledger misses 1 % (worst {worst:+.2%})"
-            )
         points.append(Point(x, y, len(cell), len(cell) - len(ok), mean, sd, count, notes))
     return points
 
