@@ -5,6 +5,7 @@ correction work booked (``joint_correction``).
 
     python benchmarks/ledger_closure.py                    # every bundled case, ~4 min
     python benchmarks/ledger_closure.py separator vertical-rotor
+    python benchmarks/ledger_closure.py vertical-rotor --set solver.substeps=2
 """
 
 from __future__ import annotations
@@ -20,10 +21,11 @@ from perga.model.from_case import scene_spec
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("cases", nargs="*", help="bundled cases by name (default: all)")
+    parser.add_argument("--set", action="append", default=[], help="override KEY=VALUE")
     args = parser.parse_args()
     names = args.cases or [p.stem for p in sorted(Path("cases").glob("*.toml"))]
     for name in names:
-        case = load_case(Path("cases") / f"{name}.toml")
+        case = load_case(Path("cases") / f"{name}.toml", overrides=args.set)
         if case.chamber is None:
             continue  # a parameter set, not a scene
         sim = Simulation(scene_spec(case))
