@@ -27,16 +27,19 @@ The terms:
 * ``contact_dissipation``: the contact model's, plus the swing stops' losses.
 * ``friction``, ``drag``: what the effects removed (:mod:`perga.engine.effects`).
 * ``gravity_work``: the potential energy released by in-plane gravity, Σ m g·Δr_cg.
-* ``joint_correction``: the work the hinge pins' position correction did, Σ J·(v̄_hammer −
-  v̄_rotor) at each hinge per step (:func:`_pivot_work`; J the pin's impulse, read raw through
-  :class:`~perga.engine.chipmunk_state.JointImpulses`): an ideal pin does none; Chipmunk's
-  pulls the drifting anchors together and does, first order in dt. Unbooked, it was the whole
+* ``joint_correction``: the work the pins' position correction did, Σ J·(v̄_hammer − v̄_rotor)
+  at each hinge and −J·v̄_rotor at a driven rotor's axis per step (:func:`_pivot_work`; J the
+  pin's impulse, read raw through :class:`~perga.engine.chipmunk_state.JointImpulses`): an
+  ideal pin does none; Chipmunk's pulls the drifting anchors together and does, first order
+  in dt. Unbooked, it was the whole
   residual before a run's first impact (docs/reliability.md).
 * ``closure`` = (drive_work + gravity_work + joint_correction − ΔKE − Δelastic −
   contact_dissipation − friction − drag) / max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|,
-  ½Σ_i|ΔKE_i|, 1e-30 J): a driven rotor's axis pin's error correction, the first-order split of
-  the kicks and rounding, nothing else (the swing stops' and hinge friction's work is booked
-  signed by their effects, :class:`~perga.engine.effects.ConstraintLosses`). The term
+  ½Σ_i|ΔKE_i|, 1e-30 J): what the steps lose or make besides that (the first-order split of
+  the kicks; the hammers' velocity held through soft granule substeps; the rigid impulses'
+  step error; each falls with the step, docs/reliability.md) and rounding (the swing stops'
+  and hinge friction's work is booked signed by their effects,
+  :class:`~perga.engine.effects.ConstraintLosses`). The term
   ½Σ_i|ΔKE_i| (kinetic energy moved between bodies) keeps the closure meaningful where nothing
   is driven or lost, e.g. an elastic free impact (ΔKE = 0).
 
@@ -56,9 +59,13 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.chipmunk_state import JointImpulses
-from perga.engine.effects import ConstraintLosses
+from perga.engine.effects import ConstraintLosses, Drive
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
+
+
+STATIC = -1
+"""A pin's body row standing for the space's static body (:func:`_pivot_work`)."""
 
 
 def _kinetic(body: pymunk.Body) -> float:
@@ -96,14 +103,19 @@ class EnergyMeter:
         self._kinetics0 = [_kinetic(b) for b in self._bodies]
         self._centres0 = [_centre(b) for b in self._bodies]
         self._drive = 0.0
-        self._hinges = JointImpulses(list(machine.hinges))
-        self._hinge_rows = np.array(
-            [(machine.row_of(j.a), machine.row_of(j.b)) for j in machine.hinges], dtype=np.int64
+        axis = [e.pivot for e in machine.effects if isinstance(e, Drive)]
+        self._pins = JointImpulses([*machine.hinges, *axis])
+        self._pin_rows = np.array(
+            [(machine.row_of(j.a), machine.row_of(j.b)) for j in machine.hinges]
+            + [(machine.row_of(j.a), STATIC) for j in axis],
+            dtype=np.int64,
         ).reshape(-1, 2)
-        self._hinge_arms = np.array(
-            [tuple(j.anchor_b - j.b.center_of_gravity) for j in machine.hinges], dtype=float
+        self._pin_arms = np.array(
+            [tuple(j.anchor_b - j.b.center_of_gravity) for j in [*machine.hinges, *axis]],
+            dtype=float,
         ).reshape(-1, 2)
-        """Each hinge's anchor on its hammer from the hammer's centre of gravity, body frame."""
+        """Each pin's anchor on its body b from b's centre of gravity, b's frame (the static
+        body's frame is the world's)."""
         self._correction = 0.0
         self._before: MachineState | None = None
 
@@ -121,13 +133,13 @@ class EnergyMeter:
         assert before is not None, "after_step without before_step"
         for effect in self._constraints:
             effect.account(before, state)
-        if self._hinge_rows.size:
+        if self._pin_rows.size:
             self._correction += _pivot_work(
                 before.table,
                 state.table,
-                self._hinge_rows,
-                self._hinge_arms,
-                self._hinges.read().reshape(-1, 2),
+                self._pin_rows,
+                self._pin_arms,
+                self._pins.read().reshape(-1, 2),
             )
         if not self._needs_balance:
             return
@@ -194,22 +206,27 @@ def _pivot_work(
 ) -> float:
     """Σ J·(v̄_b − v̄_a) over pivot joints: the work their position correction did in a step
     (an ideal pin does none). Joint k joins the bodies at ``rows[k]`` = (a, b) of two
-    machine-state tables; J = ``impulses[k]`` acts on b at its anchor, ``arms[k]`` from b's
-    centre of gravity in b's frame; v̄ is each body's velocity at that point, the mean of before
-    and after the step, at the lever arm of the step's new positions (where Chipmunk applies
-    the impulse)."""
+    machine-state tables, b = :data:`STATIC` for the static body (at rest, its frame the
+    world's); J = ``impulses[k]`` acts on b at its anchor, ``arms[k]`` from b's centre of
+    gravity in b's frame; v̄ is each body's velocity at that point, the mean of before and after
+    the step, at the lever arm of the step's new positions (where Chipmunk applies the
+    impulse)."""
     total = 0.0
     for k in range(rows.shape[0]):
         a, b = rows[k, 0], rows[k, 1]
-        cos, sin = math.cos(after[b, 2]), math.sin(after[b, 2])
-        rbx = cos * arms[k, 0] - sin * arms[k, 1]
-        rby = sin * arms[k, 0] + cos * arms[k, 1]
-        rax = after[b, 0] + rbx - after[a, 0]
-        ray = after[b, 1] + rby - after[a, 1]
-        wb = 0.5 * (before[b, 5] + after[b, 5])
+        if b == STATIC:
+            rax, ray = arms[k, 0] - after[a, 0], arms[k, 1] - after[a, 1]
+            vbx = vby = 0.0
+        else:
+            cos, sin = math.cos(after[b, 2]), math.sin(after[b, 2])
+            rbx = cos * arms[k, 0] - sin * arms[k, 1]
+            rby = sin * arms[k, 0] + cos * arms[k, 1]
+            rax = after[b, 0] + rbx - after[a, 0]
+            ray = after[b, 1] + rby - after[a, 1]
+            wb = 0.5 * (before[b, 5] + after[b, 5])
+            vbx = 0.5 * (before[b, 3] + after[b, 3]) - wb * rby
+            vby = 0.5 * (before[b, 4] + after[b, 4]) + wb * rbx
         wa = 0.5 * (before[a, 5] + after[a, 5])
-        vbx = 0.5 * (before[b, 3] + after[b, 3]) - wb * rby
-        vby = 0.5 * (before[b, 4] + after[b, 4]) + wb * rbx
         vax = 0.5 * (before[a, 3] + after[a, 3]) - wa * ray
         vay = 0.5 * (before[a, 4] + after[a, 4]) + wa * rax
         total += impulses[k, 0] * (vbx - vax) + impulses[k, 1] * (vby - vay)
