@@ -63,7 +63,6 @@ from perga.engine.effects import ConstraintLosses, Drive
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
 
-
 STATIC = -1
 """A pin's body row standing for the space's static body (:func:`_pivot_work`)."""
 
