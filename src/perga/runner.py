@@ -26,6 +26,7 @@ import tomli_w
 
 from perga import checkpoints
 from perga.case.schema import Case
+from perga.case.timestep import contact_plan
 from perga.engine.simulation import Simulation
 from perga.geometry.clearance import overlapping_pairs
 from perga.model.frame import Frame
@@ -60,6 +61,9 @@ class RunSummary:
     steps: int = 0
     dt: float = 0.0
     time_step: dict[str, float | str] = field(default_factory=dict)
+    contacts: list[dict[str, object]] = field(default_factory=list)
+    """Soft contacts: per contact kind its materials, stiffness, damping and the convention
+    that gives it from e, duration and steps per contact (:class:`perga.case.timestep.PairPlan`)."""
     simulated_time: float = 0.0
     wall_time: float = 0.0
     steps_per_second: float = 0.0
@@ -247,6 +251,8 @@ def _build(
     )
     assert spec.plan is not None
     summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
+    if case.contact_model.soft:
+        summary.contacts = [asdict(p) for p in contact_plan(case, spec.granule_dt)]
     stop.check()
     write_scene(directory, spec)
     recorders = make_recorders(record, directory, spec, case.output.granule_table)
@@ -282,7 +288,8 @@ def check_resumable(directory: Path) -> None:
     before it wrote summary.json counts as stopped)."""
     summary = directory / "summary.json"
     try:
-        status = json.loads(summary.read_text()).get("status") if summary.is_file() else None
+        text = summary.read_text(encoding="utf-8") if summary.is_file() else "{}"
+        status = json.loads(text).get("status")
     except (OSError, ValueError, AttributeError):
         status = None
     if status in FINISHED:
@@ -428,9 +435,10 @@ def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path)
                 "removed_broken": frame.removed_broken,
                 "present": len(frame.granules.ids),
             }
-    text = json.dumps(_finite_or_null(asdict(summary)), indent=2, allow_nan=False) + "\n"
+    data = _finite_or_null(asdict(summary))
+    text = json.dumps(data, indent=2, allow_nan=False, ensure_ascii=False) + "\n"
     temporary = directory / ".summary.json.tmp"  # written whole, then renamed over the old one
-    temporary.write_text(text)
+    temporary.write_text(text, encoding="utf-8")
     temporary.replace(directory / "summary.json")
 
 

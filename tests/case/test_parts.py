@@ -85,16 +85,15 @@ def _wall_hit(soft: bool, e: float, v0: float = 3.0, at_joint: float | None = No
     if at_joint is not None:
         normal = b / np.linalg.norm(b)
         start = b - normal * (RADIUS + 0.002) + at_joint * np.array([-normal[1], normal[0]])
+    stiffness = 1.6e-4 * (math.pi / 1e-4) ** 2 if soft else None  # N/m: t_c ≈ 0.1 ms
     spec = SceneSpec(
         rotor=RotorSpec(0.0, 0.1),
         hammers=(),
         granules=(GranuleSpec(tuple(start), tuple(v0 * normal), RADIUS, MASS, "bb"),),
-        contacts=(ContactSpec("bb", "steel", e, 0.3),),
+        contacts=(ContactSpec("bb", "steel", e, 0.3, stiffness),),
         granule_dt=1e-6 if soft else 1e-5,
         chamber=ChamberSpec(0.3, 0.02, "steel", outline=tuple(map(tuple, ROUND))),
-        contact_model=SoftContactSpec("linear", 1.6e-4 * (math.pi / 1e-4) ** 2)
-        if soft
-        else RigidContactSpec(),
+        contact_model=SoftContactSpec("linear") if soft else RigidContactSpec(),
     )
     sim = Simulation(spec)
     sim.run(2 * 0.002 / v0)

@@ -299,12 +299,8 @@ def _contact_model(case: Case) -> list[str]:
             "granules.rolls: must be true with soft contacts (a soft granule is a disc with "
             "I = m r²/2; sliding points need contact_model.kind = 'rigid')"
         )
-    if cm.kind == "hertz" and case.granules.size is not None:
-        problems.append(
-            "granules.size: Hertz contacts take one granule radius per material (their "
-            "stiffness k√R* is tabled per material pair); a size distribution needs "
-            "contact_model.kind = 'linear'"
-        )
+    if cm.kind == "hertz":
+        problems += _hertz_moduli(case)
     tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
     for i, contact in enumerate(case.contacts):
         try:
@@ -315,6 +311,29 @@ def _contact_model(case: Case) -> list[str]:
                 f"{cm.kind} contact that ends at zero {cm.end}: needs e in "
                 f"({FORCE_END_MIN_RESTITUTION if cm.end == 'force' else 0:.4g}, 1]"
                 + ("; contact_model.end = 'overlap' reaches any e > 0" if cm.end == "force" else "")
+            )
+    return problems
+
+
+def _hertz_moduli(case: Case) -> list[str]:
+    """Hertz stiffness comes from contact_model.stiffness, shared, or from every contact
+    material's Young's modulus and Poisson's ratio: one of the two, whole."""
+    used = sorted({m for c in case.contacts for m in c.pair if m in case.materials})
+    given = [m for m in used if case.materials[m].youngs_modulus is not None]
+    if case.contact_model.stiffness is not None:
+        return [
+            f"materials.{m}.youngs_modulus: contact_model.stiffness already sets every Hertz "
+            "pair's stiffness; give one of the two"
+            for m in given
+        ]
+    problems = []
+    for m in used:
+        missing = [k for k in ("youngs_modulus", "poisson_ratio")
+                   if getattr(case.materials[m], k) is None]  # fmt: skip
+        if missing:
+            problems.append(
+                f"materials.{m}: Hertz contacts without contact_model.stiffness need "
+                f"{' and '.join(missing)} (Pa; -) of every material in [[contacts]]"
             )
     return problems
 

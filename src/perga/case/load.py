@@ -51,9 +51,11 @@ def _resolve(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | N
     ``placement.angle``), and the model that owns its last key."""
     models: list[type[BaseModel]] = [Case]
     clean: list[Any] = []
+    named = False  # the part before was a table of named entries ([materials.NAME])
     for i, part in enumerate(loc):
-        if isinstance(part, int):
+        if isinstance(part, int) or named:
             clean.append(part)
+            named = False
             continue
         tagged = [m for m in models if _kind(m) == part]
         if tagged and len(models) > 1:
@@ -65,7 +67,9 @@ def _resolve(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | N
         owner = next((m for m in models if part in m.model_fields), None)
         if owner is None:
             return tuple(clean), None
-        models = _models(owner.model_fields[part].annotation)
+        annotation = owner.model_fields[part].annotation
+        named = typing.get_origin(annotation) is dict
+        models = _models(annotation)
     owner = next((m for m in models if loc and str(loc[-1]) in m.model_fields), None)
     if owner is None and len(models) == 1:
         owner = models[0]

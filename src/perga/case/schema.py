@@ -449,6 +449,16 @@ class Material(Strict):
     """[materials.NAME]."""
 
     density: float = Field(ge=1, le=30000, description="density, kg/m³, in [1, 30000]")
+    youngs_modulus: float | None = Field(
+        None,
+        ge=1e3,
+        le=2e12,
+        description="Young's modulus E, Pa, in [1e3, 2e12]: with poisson_ratio, the Hertz "
+        "stiffness of each pair, (4/3)E*·√R* with 1/E* = (1 − ν_a²)/E_a + (1 − ν_b²)/E_b",
+    )
+    poisson_ratio: float | None = Field(
+        None, ge=-0.99, le=0.5, description="Poisson's ratio ν, in [-0.99, 0.5]"
+    )
     detachment_force: float | None = Field(
         None,
         ge=1e-9,
@@ -632,8 +642,9 @@ class ContactModel(Strict):
     stiffness: float | None = Field(
         None,
         ge=1,
-        description="normal stiffness k_n, >= 1: N/m (linear; or duration) or (4/3)E*, Pa "
-        "(hertz: the contact stiffness is k_n·√R_eff)",
+        description="normal stiffness k_n, >= 1: N/m (linear; or duration) or (4/3)E*, Pa, "
+        "shared by every pair (hertz: the contact stiffness is k_n·√R*; or give the materials' "
+        "youngs_modulus and poisson_ratio)",
     )
     tangential_ratio: float = Field(
         2.0 / 7.0, ge=0, le=1, description="k_t/k_n, in [0, 1]; default 2/7 (as LAMMPS)"
@@ -663,8 +674,11 @@ class ContactModel(Strict):
                 raise ValueError("duration and stiffness are for kind = 'linear' or 'hertz'")
         elif self.kind == "linear" and (self.duration is None) == (self.stiffness is None):
             raise ValueError("kind = 'linear' needs exactly one of duration (s) or stiffness (N/m)")
-        elif self.kind == "hertz" and (self.stiffness is None or self.duration is not None):
-            raise ValueError("kind = 'hertz' needs stiffness ((4/3)E*, Pa) and no duration")
+        elif self.kind == "hertz" and self.duration is not None:
+            raise ValueError(
+                "kind = 'hertz' takes stiffness ((4/3)E*, Pa) or the materials' youngs_modulus "
+                "and poisson_ratio, not a duration"
+            )
         return self
 
     @property

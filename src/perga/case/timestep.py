@@ -16,10 +16,16 @@ from typing import Literal
 
 import numpy as np
 
-from perga.analytic.contact import HertzTsuji, LinearSpringDashpot, tunnelling_time_step
+from perga.analytic.contact import (
+    HertzTsuji,
+    LinearSpringDashpot,
+    damping_ratio,
+    tsuji_alpha,
+    tunnelling_time_step,
+)
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry
-from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
+from perga.case.schema import Case, ExplicitPlacement, Material, ShotPlacement
 from perga.case.sizes import masses, radius_range
 
 MAX_ROTATION_PER_STEP = 0.05
@@ -81,46 +87,114 @@ def _pairs(case: Case) -> list[tuple[str, float, float]]:
     return pairs
 
 
-def _pair_restitution(case: Case, name: str) -> float:
+def pair_materials(case: Case, name: str) -> tuple[str, str]:
+    """The materials of a soft contact kind of :func:`_pairs` (granule-hammer, -wall,
+    -granule)."""
     other = {
         "granule-hammer": case.hammers.material,
         "granule-wall": case.chamber.material if case.chamber else "",
         "granule-granule": case.granules.material,
     }[name]
-    return case.contact(case.granules.material, other).restitution
+    return case.granules.material, other
 
 
 def normal_stiffness(case: Case) -> float:
-    """k_n of the soft contacts: contact_model.stiffness (N/m linear, Pa Hertz), or for a
+    """The k_n every pair shares: contact_model.stiffness (N/m linear, Pa Hertz), or for a
     linear model given by duration the k that makes a granule striking a rigid wall with the
     granule-hammer restitution last that long, N/m."""
     cm = case.contact_model
     if cm.stiffness is not None:
         return cm.stiffness
     if cm.duration is None:
-        raise ValueError("contact_model: rigid contacts have no stiffness")
+        raise ValueError("contact_model: no stiffness or duration shared by every pair")
     e = case.granule_hammer_contact.restitution
     return LinearSpringDashpot.from_duration(cm.duration, e, case.granule_mass, cm.end).k
+
+
+def effective_modulus(a: Material, b: Material) -> float:
+    """E* of two materials in contact, Pa: 1/E* = (1 − ν_a²)/E_a + (1 − ν_b²)/E_b (Johnson,
+    Contact Mechanics, 1985, §4.2)."""
+    if None in (a.youngs_modulus, a.poisson_ratio, b.youngs_modulus, b.poisson_ratio):
+        raise ValueError("effective_modulus needs both materials' youngs_modulus and poisson_ratio")
+    return 1.0 / (
+        (1.0 - a.poisson_ratio**2) / a.youngs_modulus
+        + (1.0 - b.poisson_ratio**2) / b.youngs_modulus
+    )
+
+
+def pair_stiffness(case: Case, a: str, b: str) -> float:
+    """k_n of the soft contacts between materials ``a`` and ``b``: N/m (linear,
+    :func:`normal_stiffness`) or (4/3)E*, Pa (Hertz: contact_model.stiffness, else from the
+    materials' Young's moduli and Poisson's ratios, :func:`effective_modulus`); a Hertz
+    contact's stiffness is this times √R*, R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
+    cm = case.contact_model
+    if cm.kind == "hertz" and cm.stiffness is None:
+        return 4.0 / 3.0 * effective_modulus(case.materials[a], case.materials[b])
+    return normal_stiffness(case)
 
 
 def contact_durations(case: Case) -> dict[str, float]:
     """Head-on contact duration of each soft contact kind (granule-hammer, -wall, -granule), s.
 
-    Linear: independent of speed; Hertz (contact stiffness k_n √R_eff): at the fastest relative
+    Linear: independent of speed; Hertz (contact stiffness k_n √R*): at the fastest relative
     speed, where it is shortest. Raises ValueError for a restitution the contact model cannot
     reach (e ≤ e⁻² with end = 'force').
     """
     cm = case.contact_model
-    k_n = normal_stiffness(case)
     v = max(fastest_relative_speed(case), 1e-3)
     out = {}
     for name, m_eff, r_eff in _pairs(case):
-        e = _pair_restitution(case, name)
+        a, b = pair_materials(case, name)
+        e = case.contact(a, b).restitution
+        k_n = pair_stiffness(case, a, b)
         if cm.kind == "linear":
             out[name] = LinearSpringDashpot.from_stiffness(k_n, e, m_eff, cm.end).duration
         else:
             contact = HertzTsuji.from_restitution(k_n * math.sqrt(r_eff), e, m_eff, cm.end)
             out[name] = contact.impact(v).duration
+    return out
+
+
+@dataclass(frozen=True)
+class PairPlan:
+    """One soft contact kind of a case as the run takes it: ``contact`` (granule-hammer, -wall,
+    -granule), its ``materials``, restitution e, normal ``stiffness`` k_n (N/m linear; (4/3)E*,
+    Pa, Hertz, whose contact stiffness is k_n√R*), dimensionless ``damping`` (ζ linear, Tsuji's
+    α = √5ζ Hertz), the ``convention`` that gives it from e, the head-on ``duration`` t_c of the
+    smallest granule (s; Hertz at the fastest relative speed) and the granule steps it takes."""
+
+    contact: str
+    materials: tuple[str, str]
+    restitution: float
+    stiffness: float
+    stiffness_unit: str
+    damping: float
+    convention: str
+    duration: float
+    steps_per_contact: float
+
+
+CONVENTIONS = {
+    "force": "ζ(e) of a contact that ends when its force returns to zero (Schwager & Pöschel "
+    "2007), a larger ζ than the usual ζ = −ln e/√(π² + ln² e)",
+    "overlap": "ζ = −ln e/√(π² + ln² e): the contact ends when its overlap returns to zero "
+    "(attractive force allowed at the end)",
+}
+"""How each end criterion (``contact_model.end``) turns e into damping."""
+
+
+def contact_plan(case: Case, granule_dt: float) -> list[PairPlan]:
+    """The soft contacts of ``case`` as taken with granule step ``granule_dt`` (s)."""
+    cm = case.contact_model
+    tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
+    out = []
+    for name, t_c in contact_durations(case).items():
+        a, b = pair_materials(case, name)
+        e = case.contact(a, b).restitution
+        unit = "N/m" if cm.kind == "linear" else "Pa, (4/3)E*: k_n·√R* per contact"
+        k, damping = pair_stiffness(case, a, b), tune(e, cm.end)
+        convention = CONVENTIONS[cm.end]
+        out.append(PairPlan(name, (a, b), e, k, unit, damping, convention, t_c, t_c / granule_dt))
     return out
 
 

@@ -215,12 +215,15 @@ class GranuleSpec:
 @dataclass(frozen=True)
 class ContactSpec:
     """Contact parameters of one unordered material pair: Newton restitution e in [0, 1] and
-    Coulomb friction f >= 0, used exactly (not as a product of per-material values)."""
+    Coulomb friction f >= 0, used exactly (not as a product of per-material values); for soft
+    contacts the pair's normal stiffness k_n: N/m (linear) or (4/3)E*, Pa (Hertz: the contact
+    stiffness is k_n·√R*, R* from the radii of the contact itself), None for rigid ones."""
 
     material_a: str
     material_b: str
     restitution: float
     friction: float
+    stiffness: float | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []
@@ -228,6 +231,8 @@ class ContactSpec:
             problems.append(f"restitution must be in [0, 1] (got {self.restitution})")
         if not (math.isfinite(self.friction) and self.friction >= 0):
             problems.append(f"friction must be finite and >= 0 (got {self.friction})")
+        if self.stiffness is not None:
+            _positive(problems, "stiffness", self.stiffness, "N/m or Pa")
         _raise(f"contact {self.material_a}-{self.material_b}", problems)
 
     @property
@@ -377,8 +382,8 @@ class RigidContactSpec:
 class SoftContactSpec:
     """Soft granule contacts (:mod:`perga.contact.soft`) instead of Pymunk impulses.
 
-    model: 'linear' (k_n in N/m) or 'hertz' (k_n = (4/3)E* in Pa; contact stiffness
-    k_n·√R_eff); tangential_ratio: k_t/k_n; rolling: rolling-resistance coefficient μ_r;
+    model: 'linear' or 'hertz' (each pair's k_n: :attr:`ContactSpec.stiffness`);
+    tangential_ratio: k_t/k_n; rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
     ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
     asked for (None: "auto", :mod:`perga.contact.soft.threads`). Damping per pair comes from
@@ -386,7 +391,6 @@ class SoftContactSpec:
     """
 
     model: Literal["linear", "hertz"]
-    stiffness: float
     tangential_ratio: float = 2.0 / 7.0
     rolling: float = 0.0
     end: Literal["force", "overlap"] = "force"
@@ -397,7 +401,6 @@ class SoftContactSpec:
         problems: list[str] = []
         if self.model not in ("linear", "hertz"):
             problems.append(f"model must be 'linear' or 'hertz' (got {self.model!r})")
-        _positive(problems, "stiffness", self.stiffness, "N/m or Pa")
         for name in ("tangential_ratio", "rolling"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
@@ -492,6 +495,10 @@ class SceneSpec:
                 problems.append(f"no contact parameters for materials {sorted(pair)}")
         for pair in sorted(set(table) - self.touching_pairs(), key=sorted):
             problems.append(f"contact pair {sorted(pair)} is unused by this scene")
+        soft = isinstance(self.contact_model, SoftContactSpec)
+        for contact in self.contacts:
+            if soft and contact.stiffness is None:
+                problems.append(f"contact pair {sorted(contact.key)} needs a soft stiffness")
         if self.drawing is not None and len(self.drawing.hammer_thickness) != len(self.hammers):
             problems.append(
                 f"drawing.hammer_thickness has {len(self.drawing.hammer_thickness)} values for "

@@ -1,5 +1,6 @@
 """Single-contact impacts run through the soft kernel, with the per-step force history."""
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,10 +45,14 @@ def impact(
     within the step). e = −(rebound normal speed)/v0; peak force and overlap are the largest
     sampled values; the duration runs from first touch (δ = 0, interpolated from the first
     sampled overlap and the approach speed) to the zero of the force, extrapolated linearly
-    from the last two positive samples (force end) or of the overlap (overlap end).
+    from the last two positive samples (force end) or of the overlap (overlap end). ``k_n``
+    is the contact's stiffness (N/m linear, N/m^{3/2} Hertz: the table takes k_n/√R*, R* the
+    radius at the wall, half of it for the pair); ``params`` a table row as it is.
     """
     if k_n is None:
         k_n = 1e6 if model == "linear" else 1e9
+    if model == "hertz":
+        k_n /= math.sqrt(radius if kind == "wall" else 0.5 * radius)
     row = contact_parameters(model, e, k_n=k_n, friction=0.0, end=end) if params is None else params
     table = uniform_table(row)
     if kind == "wall":

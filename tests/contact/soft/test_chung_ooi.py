@@ -65,6 +65,22 @@ ALUMINA = {"E": 3.8e11, "nu": 0.23, "rho": 4000.0, "R": 0.010}
 AL_ALLOY = {"E": 7.0e10, "nu": 0.33, "rho": 2700.0, "R": 0.10}
 
 
+def _table_row(row: np.ndarray, r_eff: float) -> np.ndarray:
+    """The kernel's table row for a contact of effective radius r_eff (m) whose resolved row is
+    ``row`` (its k_n, k_t the contact's own, as the closed forms and ``_reference`` take them):
+    a Hertz row's stiffnesses over √r_eff (the kernel multiplies them back)."""
+    out = row.copy()
+    if row[P_HERTZ] != 0.0:
+        out[P_KN] /= math.sqrt(r_eff)
+        out[P_KT] /= math.sqrt(r_eff)
+    return out
+
+
+def _duration(row: np.ndarray, m_eff: float, v_n: float) -> float:
+    """``contact_duration`` of a resolved row (see ``_table_row``), s."""
+    return contact_duration(row, m_eff, 1.0, v_n)
+
+
 def _sphere_mass(mat: dict) -> float:
     return 4.0 / 3.0 * math.pi * mat["R"] ** 3 * mat["rho"]
 
@@ -162,7 +178,7 @@ def _oblique(v_n, v_t, w0, f, e=1.0, model="hertz"):
         [[0.0, r + 0.3 * v_n * 1e-9]],
         [r],
         [m],
-        uniform_table(row),
+        uniform_table(_table_row(row, r)),
         v=[[v_t, -v_n]],
         w=[w0],
         walls=[plane((0.0, 0.0), (0.0, 1.0))],
@@ -378,7 +394,7 @@ def _reference(row: np.ndarray, a: Disc, b: Disc, u0: tuple[float, float]) -> Re
         sigma = int(np.sign(vt))
     t = 0.0
     # A step limit keeps the first step (no force yet at δ = 0) from leaping through the contact.
-    max_step = 0.02 * contact_duration(row, m_eff, -u0[1])
+    max_step = 0.02 * _duration(row, m_eff, -u0[1])
     for _ in range(50):
         events = [end, to_slip] if sigma == 0 else [end, to_stick(sigma)]
         sol = solve_ivp(
@@ -480,7 +496,7 @@ def _check_against_reference(params, row, a, b, v_a, v_b, v_n, e, f):
     """
     ref = _reference(row, a, b, np.subtract(v_a, v_b))
     m_eff = a.m if b is WALL else a.m * b.m / (a.m + b.m)
-    t_c = contact_duration(row, m_eff, v_n)
+    t_c = _duration(row, m_eff, v_n)
     normal = ref.normal
     tangent = np.array([-normal[1], normal[0]])
     if b is WALL:
@@ -549,7 +565,7 @@ def test_6_oblique_impact_constant_normal_speed_tangential_compliance(model, e):
     """
     v_n = 5.0
     row = _co_row(model, e, F_CO)
-    params = uniform_table(row)
+    params = uniform_table(_table_row(row, CO_RADIUS))
     disc = _co_disc()
     coulomb = F_CO * (1.0 + e) * v_n
     sticking = 0
@@ -597,7 +613,7 @@ def test_7_oblique_impact_of_two_identical_discs(model, e):
     """
     disc = _co_disc()
     row = _co_row(model, e, F_CO, 0.5 * CO_RADIUS, wall=False)
-    params = uniform_table(row)
+    params = uniform_table(_table_row(row, 0.5 * CO_RADIUS))
     speed = 5.0
     for angle in (5, 10, 20, 30, 45, 60, 80):
         theta = math.radians(angle)
@@ -632,7 +648,7 @@ def test_7_angular_momentum_conserved_to_round_off():
     row = _co_row("linear", 0.5, 0.5, wall=False)
     speed, theta = 5.0, math.radians(30.0)
     v_a = (speed * math.sin(theta), -speed * math.cos(theta))
-    t_c = contact_duration(row, 0.5 * disc.m, speed)
+    t_c = _duration(row, 0.5 * disc.m, speed)
     u = np.array(v_a)
     dt = t_c / 50.0
     g = SoftGranules(
@@ -651,8 +667,10 @@ def test_7_angular_momentum_conserved_to_round_off():
 
 def _pair_table(model: str, e: float, f: float, a: Disc, b: Disc) -> tuple[np.ndarray, np.ndarray]:
     """(table, row A-B) with materials 0 = A, 1 = B; Hertz stiffness on R_eff of this pair."""
-    row = _co_row(model, e, f, a.r * b.r / (a.r + b.r), wall=False)
-    return pair_table(2, {(0, 0): row, (1, 1): row, (0, 1): row}), row
+    r_eff = a.r * b.r / (a.r + b.r)
+    row = _co_row(model, e, f, r_eff, wall=False)
+    table_row = _table_row(row, r_eff)
+    return pair_table(2, {(0, 0): table_row, (1, 1): table_row, (0, 1): table_row}), row
 
 
 def _head_on(params, a: Disc, b: Disc, v_n: float, dt: float):
@@ -701,7 +719,7 @@ def test_8_impact_of_discs_of_different_sizes(ratio, model, e):
     params, row = _pair_table(model, e, F_CO, a, b)
     v_n = 5.0
     m_eff = a.m * b.m / (a.m + b.m)
-    t_c = contact_duration(row, m_eff, v_n)
+    t_c = _duration(row, m_eff, v_n)
     if model == "hertz":
         theory = HertzTsuji(row[P_KN], row[P_DAMP], m_eff, "force").impact(v_n)
     else:

@@ -108,8 +108,9 @@ def test_the_chunks_fix_the_results_whatever_the_threads():
 def test_default_step_is_fiftieth_of_shortest_contact():
     """dt = t_c/50 of the lightest pair (m_eff = m_min/2 is below the wall's m_min)."""
     g = _chamber_gas(20, 4)
-    m_min = g.m.min()
-    assert g.t_c == pytest.approx(contact_duration(g.params[0, 0], 0.5 * m_min, 0.0), rel=1e-12)
+    m_min, r_min = g.m.min(), g.r.min()
+    t_c = contact_duration(g.params[0, 0], 0.5 * m_min, 0.5 * r_min, 0.0)
+    assert g.t_c == pytest.approx(t_c, rel=1e-12)
     assert g.dt == pytest.approx(g.t_c / 50.0, rel=1e-12)
 
 

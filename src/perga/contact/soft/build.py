@@ -3,11 +3,9 @@
 Materials: the granules' and the chamber's share the kernel's pair table (:mod:`perga.contact.soft.
 laws`); the hammers' materials index the columns of the granule-polygon table
 (:mod:`perga.contact.soft.polygon_set`). Each pair's row is calibrated to the pair's
-restitution and uses its friction; the normal stiffness is the spec's k_n (linear, N/m) or,
-for Hertz, k_n·√R_eff
-with R_eff = r_a r_b/(r_a + r_b) between granules and r at the wall (the chamber's curvature,
-r/R_chamber ≈ 1 %, is neglected; polygons use r themselves). Pairs that never touch (wall-wall)
-get an inert placeholder row, which the kernel never reads.
+restitution, uses its friction and its normal stiffness k_n (:attr:`ContactSpec.stiffness`: N/m
+linear, (4/3)E* Pa Hertz; the kernel multiplies a Hertz k_n by √R* of each contact's own radii).
+Pairs that never touch (wall-wall) get an inert placeholder row, which the kernel never reads.
 """
 
 from __future__ import annotations
@@ -21,31 +19,6 @@ from perga.contact.soft.polygon_set import ContactTable, PolygonSet, contact_tab
 from perga.model.spec import SceneSpec, SoftContactSpec
 
 
-def _radius_of(spec: SceneSpec, material: str) -> float:
-    """The radius of the granules of ``material`` (one per material: ``granule_radii``), m (inf
-    for a wall: a flat partner)."""
-    return granule_radii(spec).get(material, math.inf)
-
-
-def granule_radii(spec: SceneSpec) -> dict[str, float]:
-    """The one radius of each granule material, m. Hertz stiffness k √R* is tabled per material
-    pair, so a Hertz scene needs one radius per material: more is refused."""
-    radii: dict[str, set[float]] = {}
-    for g in spec.granules:
-        radii.setdefault(g.material, set()).add(g.radius)
-    feed = spec.process.feed
-    if feed is not None:
-        radii.setdefault(feed.material, set()).update(feed.sizes.quantiles)
-    for material, values in radii.items():
-        if len(values) > 1:
-            raise ValueError(
-                f"Hertz contacts take one granule radius per material; {material!r} has "
-                f"{len(values)} (from {min(values):.4g} to {max(values):.4g} m): use the "
-                f"'linear' model or one size"
-            )
-    return {material: values.pop() for material, values in radii.items()}
-
-
 def granule_table_materials(spec: SceneSpec) -> list[str]:
     """The granule table's materials: those of the granules present and fed, sorted, then a
     round chamber's."""
@@ -54,18 +27,6 @@ def granule_table_materials(spec: SceneSpec) -> list[str]:
     if chamber_wall and spec.chamber.material not in materials:
         materials.append(spec.chamber.material)
     return materials
-
-
-def _stiffness(spec: SceneSpec, a: str, b: str) -> float:
-    soft = spec.contact_model
-    assert isinstance(soft, SoftContactSpec)
-    if soft.model == "linear":
-        return soft.stiffness
-    ra, rb = _radius_of(spec, a), _radius_of(spec, b)
-    if math.isinf(ra) and math.isinf(rb):  # wall-wall: never in contact
-        return soft.stiffness
-    r_eff = ra if math.isinf(rb) else rb if math.isinf(ra) else ra * rb / (ra + rb)
-    return soft.stiffness * math.sqrt(r_eff)
 
 
 def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
@@ -77,12 +38,12 @@ def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
     for i, a in enumerate(materials):
         for j in range(i, len(materials)):
             b = materials[j]
-            k = _stiffness(spec, a, b)
             if frozenset((a, b)) in pairs:
                 c = spec.contact(a, b)
-                e, f, rolling = c.restitution, c.friction, soft.rolling
+                assert c.stiffness is not None
+                k, e, f, rolling = c.stiffness, c.restitution, c.friction, soft.rolling
             else:  # never touch: a valid row that is never read
-                e, f, rolling = 1.0, 0.0, 0.0
+                k, e, f, rolling = 1.0, 1.0, 0.0, 0.0
             rows[(i, j)] = contact_parameters(
                 soft.model,
                 e,
@@ -102,14 +63,14 @@ def polygon_table(
     soft = spec.contact_model
     assert isinstance(soft, SoftContactSpec)
     shape = (len(materials), len(polygon_materials))
-    e, f = np.ones(shape), np.zeros(shape)
+    k_n, e, f = np.ones(shape), np.ones(shape), np.zeros(shape)
     granule_materials = spec.granule_materials
     for i, a in enumerate(materials):
         for j, b in enumerate(polygon_materials):
             if a in granule_materials:
                 c = spec.contact(a, b)
-                e[i, j], f[i, j] = c.restitution, c.friction
-    k_n = soft.stiffness
+                assert c.stiffness is not None
+                k_n[i, j], e[i, j], f[i, j] = c.stiffness, c.restitution, c.friction
     return contact_table(k_n, soft.tangential_ratio * k_n, e, f, soft.model, soft.end)
 
 

@@ -192,25 +192,29 @@ class SoftGranules:
         """Shortest head-on contact duration over the material pairs present, s.
 
         Granule pairs (that can form: with ``pairs``, two granules at least) use the two
-        smallest masses of their materials (m_eff grows with both masses), walls the smallest
-        granule mass, polygons ``_polygon_durations``; Hertz at approach speed v_max.
+        smallest masses and radii of their materials (m_eff grows with both masses; a Hertz
+        contact of small granules is the shortest, t_c ∝ r^{3/5}), walls the smallest granule,
+        polygons ``_polygon_durations``; Hertz at approach speed v_max.
         """
         if self.n == 0:
             return math.inf
         durations = []
         mats = np.unique(self.mat)
         m_min = {int(a): float(self.m[self.mat == a].min()) for a in mats}
+        r_min = {int(a): float(self.r[self.mat == a].min()) for a in mats}
         count = {int(a): int(np.sum(self.mat == a)) for a in mats}
         for a in mats:
             for b in mats:
                 if b < a or not self.pairs or (a == b and count[int(a)] < 2):
                     continue  # a pair that cannot form
                 ma, mb = m_min[int(a)], m_min[int(b)]
+                ra, rb = r_min[int(a)], r_min[int(b)]
                 row = self.params[a, b]
-                durations.append(contact_duration(row, ma * mb / (ma + mb), self.v_max))
+                m_eff, r_eff = ma * mb / (ma + mb), ra * rb / (ra + rb)
+                durations.append(contact_duration(row, m_eff, r_eff, self.v_max))
             for s in range(self.walls.shape[0]):
                 row = self.params[a, int(self.walls[s, 5])]
-                durations.append(contact_duration(row, m_min[int(a)], self.v_max))
+                durations.append(contact_duration(row, m_min[int(a)], r_min[int(a)], self.v_max))
         return min(durations + self._polygon_durations())
 
     def _polygon_durations(self) -> list[float]:
@@ -439,16 +443,18 @@ class SoftGranules:
     @staticmethod
     def _spring_energy(
         rows: np.ndarray,
+        r_eff: np.ndarray,
         delta: np.ndarray,
         xi: np.ndarray,
         normal: bool = True,
         tangential: bool = True,
     ) -> np.ndarray:
-        """Normal (over δ⁺) and/or tangential spring energy of contacts with rows ``rows``, J."""
+        """Normal (over δ⁺) and/or tangential spring energy of contacts with rows ``rows`` and
+        effective radii ``r_eff`` (m), J."""
         delta = np.maximum(delta, 0.0)
         hertz = rows[:, P_HERTZ] != 0.0
-        kn = rows[:, P_KN]
-        kt = np.where(hertz, rows[:, P_KT] * np.sqrt(delta), rows[:, P_KT])
+        kn = np.where(hertz, rows[:, P_KN] * np.sqrt(r_eff), rows[:, P_KN])
+        kt = np.where(hertz, rows[:, P_KT] * np.sqrt(r_eff * delta), rows[:, P_KT])
         energy = np.where(hertz, 0.4 * kn * delta**2.5, 0.5 * kn * delta**2) * normal
         return energy + 0.5 * kt * xi**2 * tangential
 
@@ -466,12 +472,14 @@ class SoftGranules:
         parts = {"normal": normal, "tangential": tangential}
         i, j, delta, k = self._pairs(springs=True)
         rows = self.params[self.mat[i], self.mat[j]]
-        total = self._spring_energy(rows, delta, self.hist[k], **parts).sum()
+        r_eff = self.r[i] * self.r[j] / (self.r[i] + self.r[j])
+        total = self._spring_energy(rows, r_eff, delta, self.hist[k], **parts).sum()
         ov = self._walls_overlap()
         for s in range(self.walls.shape[0]):
             c = np.flatnonzero((ov[:, s] > 0) | (self.wall_hist[:, s] != 0))
             rows = self.params[self.mat[c], int(self.walls[s, 5])]
-            total += self._spring_energy(rows, ov[c, s], self.wall_hist[c, s], **parts).sum()
+            springs = self._spring_energy(rows, self.r[c], ov[c, s], self.wall_hist[c, s], **parts)
+            total += springs.sum()
         return float(total) + self.polygon_contact_energy(**parts)
 
     def polygon_contact_energy(self, *, normal: bool = True, tangential: bool = True) -> float:
@@ -536,13 +544,14 @@ class SoftGranules:
         i, j, delta, _ = self._pairs()
         rows = self.params[self.mat[i], self.mat[j]]
         m_eff = self.m[i] * self.m[j] / (self.m[i] + self.m[j])
-        e = self._spring_energy(rows, delta, np.zeros_like(delta))
+        r_eff = self.r[i] * self.r[j] / (self.r[i] + self.r[j])
+        e = self._spring_energy(rows, r_eff, delta, np.zeros_like(delta))
         speeds = [np.sqrt(2.0 * e / m_eff)]
         ov = self._walls_overlap()
         for s in range(self.walls.shape[0]):
             c = np.flatnonzero(ov[:, s] > 0)
             rows = self.params[self.mat[c], int(self.walls[s, 5])]
-            e = self._spring_energy(rows, ov[c, s], np.zeros(c.size))
+            e = self._spring_energy(rows, self.r[c], ov[c, s], np.zeros(c.size))
             speeds.append(np.sqrt(2.0 * e / self.m[c]))
         return float(max(s.max(initial=0.0) for s in speeds))
 

@@ -85,10 +85,10 @@ from perga.contact.soft.laws import (
     P_DAMP,
     P_DAMPT,
     P_HERTZ,
-    P_KN,
     P_MU,
     P_MUR,
     contact_law,
+    contact_stiffness,
     normal_force,
     released,
     rolling_torque,
@@ -237,7 +237,8 @@ def pair_force(
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], rs - math.sqrt(d2), xi)
+        r_eff = r[i] * r[j] / rs
+        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], r_eff, rs - math.sqrt(d2), xi)
     if d2 > 0.0:
         d = math.sqrt(d2)
         nx = dx / d
@@ -252,12 +253,13 @@ def pair_force(
     delta = rs - d
     a = mat[i]
     b = mat[j]
+    r_eff = r[i] * r[j] / rs
     if not touching(delta, ddelta, dt):
         xi = hist[k]
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, delta, xi)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r_eff, delta, xi)
     m_eff = m[i] * m[j] / (m[i] + m[j])
     wi = w[i] + h * a_prev[i, 2]
     wj = w[j] + h * a_prev[j, 2]
@@ -270,26 +272,27 @@ def pair_force(
         arm_i = r[i] - half
         arm_j = r[j] - half
         vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
-        fn, ft, hist[k], lost = contact_law(params, a, b, delta, ddelta, vt, m_eff, hist[k], dt)
+        fn, ft, hist[k], lost = contact_law(
+            params, a, b, r_eff, delta, ddelta, vt, m_eff, hist[k], dt
+        )
         fx = fn * nx + ft * tx
         fy = fn * ny + ft * ty
         ti = -arm_i * ft
         tj = -arm_j * ft
     else:
         fn, lost = normal_force(
-            params[a, b, P_KN], params[a, b, P_DAMP], params[a, b, P_HERTZ],
+            contact_stiffness(params, a, b, r_eff), params[a, b, P_DAMP], params[a, b, P_HERTZ],
             params[a, b, P_CLAMP], delta, ddelta, m_eff, dt,
         )  # fmt: skip
         xi = hist[k]
         if xi != 0.0:
             hist[k] = 0.0
-            lost += released(params, a, b, delta, xi)
+            lost += released(params, a, b, r_eff, delta, xi)
         fx = fn * nx
         fy = fn * ny
         ti = 0.0
         tj = 0.0
     if params[a, b, P_MUR] != 0.0:  # rolling resistance
-        r_eff = r[i] * r[j] / rs
         i_red = inertia[i] * inertia[j] / (inertia[i] + inertia[j])
         mr = rolling_torque(params, a, b, fn, wi - wj, r_eff, i_red, dt)
         if mr != 0.0:
@@ -388,7 +391,7 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
             if inside > 0.0 and d2 < inside * inside:
                 xi = wall_hist[i, s]
                 if xi != 0.0:
-                    lost += released(params, a, b, r[i] + math.sqrt(d2) - rows[s, 3], xi)
+                    lost += released(params, a, b, r[i], r[i] + math.sqrt(d2) - rows[s, 3], xi)
                     wall_hist[i, s] = 0.0
                 continue
             d = math.sqrt(d2)
@@ -407,14 +410,14 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
         if not touching(delta, ddelta, dt):
             xi = wall_hist[i, s]
             if xi != 0.0:
-                lost += released(params, a, b, delta, xi)
+                lost += released(params, a, b, r[i], delta, xi)
                 wall_hist[i, s] = 0.0
             continue
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
         fn, ft, wall_hist[i, s], de = contact_law(
-            params, a, b, delta, ddelta, vt, m[i], wall_hist[i, s], dt
+            params, a, b, r[i], delta, ddelta, vt, m[i], wall_hist[i, s], dt
         )
         fx += fn * nx + ft * tx
         fy += fn * ny + ft * ty

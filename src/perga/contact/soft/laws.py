@@ -17,12 +17,13 @@ the rotation of the spring onto the new tangent plane that 3-D codes do explicit
 
 Parameter table ``params[mat_A, mat_B, :]`` (symmetric, float64, C-contiguous), columns P_*:
 
-P_KN     normal stiffness k_n: N/m (linear) or N/m^{3/2} (Hertz)
+P_KN     normal stiffness k_n: N/m (linear) or (4/3)E*, Pa (Hertz: the contact's stiffness is
+         k_n·√R*, R* = r_A r_B/(r_A + r_B) of the contact's own radii, r_A at a wall)
 P_DAMP   dimensionless damping D: force D·√(k_n m_eff)·δ̇ (linear, D = 2ζ) or
          D·√(k_n m_eff)·δ^{1/4}·δ̇ (Hertz-Tsuji, D = α); m_eff is the contact's own reduced mass
          (m_A m_B/(m_A + m_B); a wall contact passes m_A, a hammer contact the hammer's
          effective mass), so e comes out right at walls and hammers too
-P_KT     tangential stiffness: k_t in N/m (linear) or k_t = P_KT·√δ (Hertz; Mindlin-like)
+P_KT     tangential stiffness: k_t in N/m (linear) or k_t = P_KT·√(R*δ) (Hertz; Mindlin-like)
 P_DAMPT  tangential damping ratio ζ_t: force −2ζ_t √(k_t m_eff) v_t (default 0)
 P_MU     Coulomb friction coefficient f: |F_t| ≤ f|F_n|; when exceeded, the spring is rescaled to
          the cap (ξ = −(F_t + c_t v_t)/k_t), Cundall & Strack (1979)
@@ -152,31 +153,42 @@ def tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def tangential_stiffness(params, a, b, delta):
-    """Tangential stiffness k_t (N/m) of materials a, b at overlap delta (m): P_KT, or P_KT·√δ⁺
-    (Hertz)."""
+def contact_stiffness(params, a, b, r_eff):
+    """Normal stiffness of a contact of materials a, b and effective radius r_eff (m): P_KN, N/m
+    (linear), or P_KN·√r_eff, N/m^{3/2} (Hertz)."""
+    kn = params[a, b, P_KN]
+    if params[a, b, P_HERTZ] != 0.0:
+        kn *= math.sqrt(r_eff)
+    return kn
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def tangential_stiffness(params, a, b, r_eff, delta):
+    """Tangential stiffness k_t (N/m) of materials a, b at effective radius r_eff and overlap
+    delta (m): P_KT, or P_KT·√(r_eff·δ⁺) (Hertz)."""
     kt = params[a, b, P_KT]
     if params[a, b, P_HERTZ] != 0.0:
-        kt *= math.sqrt(max(delta, 0.0))
+        kt *= math.sqrt(r_eff * max(delta, 0.0))
     return kt
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def released(params, a, b, delta, xi):
+def released(params, a, b, r_eff, delta, xi):
     """Energy ½ k_t ξ² of a tangential spring dropped when its contact ends at overlap delta, J.
 
     A contact ends (the history is reset) with ξ ≠ 0 only when the law left it so at its last
     step (tangential damping at F_n = 0, or an attractive F_n with end="overlap"); the spring
     energy then counts as dissipated. Zero for Hertz rows (k_t = 0 at δ ≤ 0).
     """
-    return 0.5 * tangential_stiffness(params, a, b, delta) * xi * xi
+    return 0.5 * tangential_stiffness(params, a, b, r_eff, delta) * xi * xi
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
+def contact_law(params, a, b, r_eff, delta, ddelta, vt, m_eff, xi, dt):
     """Normal and tangential force of one contact between materials a, b over one step.
 
-    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; delta:
+    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; r_eff:
+    the contact's effective radius R*, m (Hertz stiffness, ``contact_stiffness``); delta:
     overlap at the step's time (may be ≤ 0 just before first touch), m; ddelta: approach rate
     dδ/dt at that time, m/s; vt: tangential slip rate of A's contact point relative to B's
     along t, m/s; m_eff: the contact's reduced mass, kg; xi: tangential spring elongation, m;
@@ -185,14 +197,14 @@ def contact_law(params, a, b, delta, ddelta, vt, m_eff, xi, dt):
     contact dissipated over the step, J.
 
     Reads the table row and calls ``contact_force`` (the law, its time discretisation and the
-    dissipation are documented there); Hertz rows get the Mindlin-like k_t = P_KT·√δ.
+    dissipation are documented there); Hertz rows get the Mindlin-like k_t = P_KT·√(R*δ).
     """
     return contact_force(
-        params[a, b, P_KN],
+        contact_stiffness(params, a, b, r_eff),
         params[a, b, P_DAMP],
         params[a, b, P_HERTZ],
         params[a, b, P_CLAMP],
-        tangential_stiffness(params, a, b, delta),
+        tangential_stiffness(params, a, b, r_eff, delta),
         params[a, b, P_DAMPT],
         params[a, b, P_MU],
         delta,
@@ -296,13 +308,16 @@ def uniform_table(row: np.ndarray, n_mat: int = 1) -> np.ndarray:
     return pair_table(n_mat, {(a, b): row for a in range(n_mat) for b in range(a, n_mat)})
 
 
-def contact_duration(row: np.ndarray, m_eff: float, v_max: float) -> float:
-    """Duration of a head-on contact of reduced mass m_eff (kg) under ``row``, s.
+def contact_duration(row: np.ndarray, m_eff: float, r_eff: float, v_max: float) -> float:
+    """Duration of a head-on contact of reduced mass m_eff (kg) and effective radius r_eff (m)
+    under ``row``, s.
 
-    Linear: independent of speed; Hertz: at the approach speed v_max (m/s), the shortest over
-    speeds up to v_max (t_c ∝ v^{-1/5}). Uses the closed forms of ``perga.analytic.contact``.
+    Linear: independent of speed and radius; Hertz (stiffness k_n√r_eff): at the approach speed
+    v_max (m/s), the shortest over speeds up to v_max (t_c ∝ v^{-1/5}). Uses the closed forms
+    of ``perga.analytic.contact``.
     """
     end: End = "force" if row[P_CLAMP] != 0.0 else "overlap"
     if row[P_HERTZ] != 0.0:
-        return HertzTsuji(row[P_KN], row[P_DAMP], m_eff, end).impact(v_max).duration
+        k = row[P_KN] * math.sqrt(r_eff)
+        return HertzTsuji(k, row[P_DAMP], m_eff, end).impact(v_max).duration
     return LinearSpringDashpot(row[P_KN], 0.5 * row[P_DAMP], m_eff, end).duration
