@@ -95,25 +95,30 @@ def test_pair_stiffness_is_four_thirds_of_the_effective_modulus(tmp_path: Path) 
 def test_hertz_contacts_take_their_own_radii_and_a_flat_wall(tmp_path: Path) -> None:
     """Two granules of radii 2 and 4 mm overlapping by 20 µm, and a 3 mm granule 30 µm into a
     chamber wall of the granules' own material: the kernel's stored energy is
-    (2/5)(4/3)E*√R* δ^{5/2} with R* = r_a r_b/(r_a + r_b) and R* = r at the wall (rel 1e-9). The
-    wall's R* once came from its material's granule radius (r/2 here: 2^{-1/2} of this energy)
-    and the pair's from one radius per material (two sizes were refused)."""
+    (2/5)(4/3)E*√R* δ^{5/2} with R* = r_a r_b/(r_a + r_b) and R* = r at the wall, and the
+    kernel's first forces (the granules at rest) (4/3)E*√R* δ^{3/2} (rel 1e-9). The wall's R*
+    once came from its material's granule radius (r/2 here: 2^{-1/2} of this stiffness) and the
+    pair's from one radius per material (two sizes were refused)."""
     spec = scene_spec(_case(tmp_path))
     (g,) = spec.granules
     d_pair, d_wall = 2e-5, 3e-5
     r_a, r_b, r_w = 0.002, 0.004, 0.003
     granules = (
-        replace(g, position=(-0.03, 0.0), radius=r_a, mass=g.mass * (r_a / g.radius) ** 2),
-        replace(g, position=(-0.03 + r_a + r_b - d_pair, 0.0), radius=r_b,
+        replace(g, position=(-0.06, 0.0), radius=r_a, mass=g.mass * (r_a / g.radius) ** 2),
+        replace(g, position=(-0.06 + r_a + r_b - d_pair, 0.0), radius=r_b,
                 mass=g.mass * (r_b / g.radius) ** 2),
         replace(g, position=(0.0, -(CHAMBER - r_w + d_wall)), radius=r_w),
     )  # fmt: skip
     sim = Simulation(replace(spec, granules=granules))
     k = spec.contact("beebread", "beebread").stiffness
-    pair = 0.4 * k * math.sqrt(r_a * r_b / (r_a + r_b)) * d_pair**2.5
+    r_pair = r_a * r_b / (r_a + r_b)
+    pair = 0.4 * k * math.sqrt(r_pair) * d_pair**2.5
     wall = 0.4 * k * math.sqrt(r_w) * d_wall**2.5
-    energy = sim.contacts.granules.contact_energy()
-    assert energy == pytest.approx(pair + wall, rel=1e-9)
+    soft = sim.contacts.granules
+    assert soft.contact_energy() == pytest.approx(pair + wall, rel=1e-9)
+    sim.step()  # at rest: the first step's forces are the springs' alone
+    assert soft.f[0, 0] == pytest.approx(-k * math.sqrt(r_pair) * d_pair**1.5, rel=1e-9)
+    assert soft.f[2, 1] == pytest.approx(k * math.sqrt(r_w) * d_wall**1.5, rel=1e-9)
 
 
 @pytest.mark.parametrize(
