@@ -26,8 +26,9 @@ ALLOWED: dict[str, set[str]] = {
                "checkpoints"},
     "checkpoints": {"checkpoints", "engine", "output", "__init__"},
     "cli": {"cli", "__init__", "case", "analytic", "model", "studies", "output", "runner", "stats",
-            "stopping", "checkpoints"},
+            "stopping", "checkpoints", "progress"},
     "stopping": set(),
+    "progress": set(),
     "__init__": set(),
 }  # fmt: skip
 """Part -> the parts it may import. ``engine`` may import the contact-model registry

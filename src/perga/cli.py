@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from perga import __version__
+from perga.progress import progress_bar
 from perga.stopping import StopRequest, StopSignal, exit_status, raise_on_stop_signals
 
 if TYPE_CHECKING:
@@ -110,8 +111,6 @@ def _run(args: argparse.Namespace) -> int:
             ["--resume RUN goes on with the run as it was: no --set, -o, --overwrite, --from"]
         )
     with StopRequest() as stop:  # the imports and the case, never stopped halfway
-        from tqdm import tqdm
-
         from perga.case import load_case
         from perga.checkpoints import CheckpointError
         from perga.runner import (
@@ -156,16 +155,18 @@ def _run(args: argparse.Namespace) -> int:
             print(f"error: cannot make the run directory {directory}: {exc.strerror or exc}; "
                   "choose another -o DIR", file=sys.stderr)  # fmt: skip
             return 2
-    bar = tqdm(
-        total=case.solver.duration,
-        unit="s(sim)",
+    bar = progress_bar(
+        case.solver.duration,
+        "s simulated",
+        "perga run",
+        args.quiet,
         bar_format="{l_bar}{bar}| {n:.4f}/{total:.4f} s simulated [{elapsed}<{remaining}{postfix}]",
-        disable=args.quiet,
     )
+    started = time.perf_counter()
 
     def progress(t: float, _duration: float, steps: int) -> None:
         bar.update(min(t, bar.total) - bar.n)
-        bar.set_postfix_str(f"{steps / max(bar.format_dict['elapsed'], 1e-9):.0f} steps/s")
+        bar.set_postfix_str(f"{steps / max(time.perf_counter() - started, 1e-9):.0f} steps/s")
 
     try:
         if args.resume is not None:
@@ -313,12 +314,6 @@ def _compare(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
-def _bar(total: int, quiet: bool, unit: str = "run"):
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit=unit, disable=quiet, file=sys.stderr)
-
-
 def _study_from_args(args: argparse.Namespace):
     """The study of ``perga sweep``: a study file, or a case with --set and --metric."""
     from perga.case.load import read_case_data
@@ -374,12 +369,11 @@ def _cluster(args: argparse.Namespace) -> dict[str, Any]:
 def _with_progress(args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]) -> T:
     """``call(progress)`` under a progress bar (unless ``args.quiet``); after a stop signal it
     says where the finished runs are and how to resume, and re-raises."""
-    bar = _bar(0, args.quiet)
+    bar = progress_bar(0, "runs", f"perga {args.command}", args.quiet)
 
     def progress(done: int, total: int) -> None:
         bar.total = total
-        bar.n = done
-        bar.refresh()
+        bar.update(done - bar.n)
 
     try:
         return call(progress)

@@ -3,11 +3,10 @@
 Reads the run directory's ``scene.json`` (geometry), ``granules.csv`` and ``hammers.csv``, and
 draws with matplotlib (a bare Figure, Agg): the chamber wall, the rotor disc, every hinged or
 welded hammer posed from its recorded swing angle and the rotor angle, and the granules as discs
-of their true radius coloured by speed, at the recorded frame nearest to ``time`` (default: the
-last). With ``trajectories`` it draws instead every granule's path in the fixed frame coloured by
-time, as
-the paper's Fig. 2b (one granule) and Fig. 5a (successive impacts) do. Free hammers, which the
-tables do not pose, are not drawn.
+of their true radius coloured by speed (from 0 m/s), at the recorded frame nearest to ``time``
+(default: the last). With ``trajectories`` it draws instead every granule's path in the fixed
+frame up to that frame, coloured by time, as the paper's Fig. 2b (one granule) and Fig. 5a
+(successive impacts) do. Free hammers, which the tables do not pose, are not drawn.
 """
 
 from __future__ import annotations
@@ -37,6 +36,12 @@ def run_table(path: Path) -> np.ndarray:
     for name, values in columns.items():
         out[name] = values
     return out
+
+
+def speed_range(speeds: np.ndarray) -> tuple[float, float]:
+    """The colour scale of speeds, m/s: from 0 to the fastest (to 1 when nothing moves)."""
+    fastest = float(np.max(speeds, initial=0.0))
+    return 0.0, fastest if fastest > 0.0 else 1.0
 
 
 def _hammer_outline(h: HammerGeometry, rotor_angle: float, alpha: float) -> np.ndarray:
@@ -86,8 +91,9 @@ def render(
     ax.add_collection(PatchCollection(polys, facecolor="0.55", edgecolor="0.2"))
     if trajectories:
         lines, stamps = [], []
-        for i in np.unique(granules["id"]):
-            path = granules[granules["id"] == i]
+        drawn = granules[granules["time"] <= t]
+        for i in np.unique(drawn["id"]):
+            path = drawn[drawn["id"] == i]
             xy = np.column_stack([path["x"], path["y"]])
             lines += list(np.stack([xy[:-1], xy[1:]], axis=1))
             stamps += list(path["time"][1:])
@@ -95,7 +101,7 @@ def render(
         ax.add_collection(segments)
         if colorbar:
             fig.colorbar(segments, ax=ax, label="time, s", shrink=0.8)
-        title = "trajectories in the fixed frame"
+        title = f"trajectories in the fixed frame to t = {t:.4g} s"
     else:
         now = granules[granules["time"] == t]
         discs = PatchCollection(
@@ -103,6 +109,7 @@ def render(
             array=now["speed"],
             cmap="plasma",
         )
+        discs.set_clim(*speed_range(now["speed"]))
         ax.add_collection(discs)
         if colorbar:
             fig.colorbar(discs, ax=ax, label="speed, m/s", shrink=0.8)
