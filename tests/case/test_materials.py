@@ -127,7 +127,12 @@ def test_hertz_contacts_take_their_own_radii_and_a_flat_wall(tmp_path: Path) -> 
         (("materials.steel.poisson_ratio=0.51",), "materials.steel.poisson_ratio"),
         (("materials.steel.youngs_modulus=999.0",), "materials.steel.youngs_modulus"),
         (("contact_model.stiffness=1e9",), "contact_model.stiffness already sets"),
-        (("contact_model.duration=1e-4",), "not a duration"),
+        (("contact_model.duration=1e-4",), "contact_model.duration already sets"),
+        (("contact_model.duration=1e-4", "contact_model.stiffness=1e9"), "one of stiffness"),
+        (
+            ('contact_model.kind="linear"', "contact_model.duration=1e-4"),
+            "youngs_modulus: sets Hertz stiffness; a linear contact",
+        ),
     ],
 )
 def test_hertz_moduli_refusals(tmp_path: Path, sets: tuple[str, ...], problem: str) -> None:
@@ -169,3 +174,21 @@ def test_the_run_summary_states_each_contact(tmp_path: Path) -> None:
         assert "Schwager & Pöschel" in c["convention"]
         assert c["steps_per_contact"] == pytest.approx(c["duration"] / summary["dt"], rel=1e-12)
     assert min(c["steps_per_contact"] for c in contacts.values()) == pytest.approx(50.0)
+
+
+def test_hertz_by_duration_lasts_that_long_at_the_fastest_speed(tmp_path: Path) -> None:
+    """(t_c, e) for Hertz as for linear contacts: with contact_model.duration = 0.1 ms (and no
+    moduli), a granule striking the wall head-on at the fastest relative speed lasts 0.1 ms
+    (the closed form, rel 1e-9), and every pair shares the k_n that gives it."""
+    from perga.case.timestep import contact_durations
+
+    text = CASE.replace('kind = "hertz"', 'kind = "hertz"\nduration = 1e-4')
+    for modulus in (f"youngs_modulus = {E_BB}\n", f"youngs_modulus = {E_STEEL}\n"):
+        text = text.replace(modulus, "")
+    case = _case(tmp_path, text)
+    assert contact_durations(case)["granule-wall"] == pytest.approx(1e-4, rel=1e-9)
+    spec = scene_spec(case)
+    assert (
+        spec.contact("beebread", "steel").stiffness
+        == spec.contact("beebread", "beebread").stiffness
+    )

@@ -301,6 +301,13 @@ def _contact_model(case: Case) -> list[str]:
         )
     if cm.kind == "hertz":
         problems += _hertz_moduli(case)
+    else:
+        problems += [
+            f"materials.{name}.youngs_modulus: sets Hertz stiffness; a linear contact takes "
+            "contact_model.duration or stiffness (or use kind = 'hertz')"
+            for name, m in case.materials.items()
+            if m.youngs_modulus is not None
+        ]
     tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
     for i, contact in enumerate(case.contacts):
         try:
@@ -316,13 +323,15 @@ def _contact_model(case: Case) -> list[str]:
 
 
 def _hertz_moduli(case: Case) -> list[str]:
-    """Hertz stiffness comes from contact_model.stiffness, shared, or from every contact
-    material's Young's modulus and Poisson's ratio: one of the two, whole."""
+    """Hertz stiffness comes from contact_model.stiffness or duration, shared, or from every
+    contact material's Young's modulus and Poisson's ratio: one of them, whole."""
     used = sorted({m for c in case.contacts for m in c.pair if m in case.materials})
     given = [m for m in used if case.materials[m].youngs_modulus is not None]
-    if case.contact_model.stiffness is not None:
+    cm = case.contact_model
+    shared = "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""
+    if shared:
         return [
-            f"materials.{m}.youngs_modulus: contact_model.stiffness already sets every Hertz "
+            f"materials.{m}.youngs_modulus: contact_model.{shared} already sets every Hertz "
             "pair's stiffness; give one of the two"
             for m in given
         ]
@@ -332,7 +341,7 @@ def _hertz_moduli(case: Case) -> list[str]:
                    if getattr(case.materials[m], k) is None]  # fmt: skip
         if missing:
             problems.append(
-                f"materials.{m}: Hertz contacts without contact_model.stiffness need "
+                f"materials.{m}: Hertz contacts without contact_model.stiffness or duration need "
                 f"{' and '.join(missing)} (Pa; -) of every material in [[contacts]]"
             )
     return problems

@@ -636,8 +636,9 @@ class ContactModel(Strict):
         None,
         ge=1e-9,
         le=0.01,
-        description="linear only: contact duration t_c of a granule striking a rigid wall "
-        "head-on with the granule-hammer restitution, s, in [1e-9, 0.01]; sets k_n (or stiffness)",
+        description="contact duration t_c of a granule striking a rigid wall head-on with "
+        "the granule-hammer restitution, s, in [1e-9, 0.01] (hertz: at the fastest relative "
+        "speed, where contacts are shortest); sets k_n (or give stiffness)",
     )
     stiffness: float | None = Field(
         None,
@@ -674,10 +675,10 @@ class ContactModel(Strict):
                 raise ValueError("duration and stiffness are for kind = 'linear' or 'hertz'")
         elif self.kind == "linear" and (self.duration is None) == (self.stiffness is None):
             raise ValueError("kind = 'linear' needs exactly one of duration (s) or stiffness (N/m)")
-        elif self.kind == "hertz" and self.duration is not None:
+        elif self.kind == "hertz" and self.duration is not None and self.stiffness is not None:
             raise ValueError(
-                "kind = 'hertz' takes stiffness ((4/3)E*, Pa) or the materials' youngs_modulus "
-                "and poisson_ratio, not a duration"
+                "kind = 'hertz' takes one of stiffness ((4/3)E*, Pa), duration (s) or the "
+                "materials' youngs_modulus and poisson_ratio"
             )
         return self
 

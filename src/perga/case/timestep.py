@@ -99,16 +99,22 @@ def pair_materials(case: Case, name: str) -> tuple[str, str]:
 
 
 def normal_stiffness(case: Case) -> float:
-    """The k_n every pair shares: contact_model.stiffness (N/m linear, Pa Hertz), or for a
-    linear model given by duration the k that makes a granule striking a rigid wall with the
-    granule-hammer restitution last that long, N/m."""
+    """The k_n every pair shares: contact_model.stiffness (N/m linear, Pa Hertz), or from
+    contact_model.duration the k_n that makes a granule (of ``granules.radius`` and its mass)
+    striking a rigid wall head-on with the granule-hammer restitution last that long: N/m
+    (linear), or (4/3)E*, Pa (Hertz, at the fastest relative speed, where its contacts are
+    shortest; t_c ∝ (k_n√r)^{-2/5} at a given α)."""
     cm = case.contact_model
     if cm.stiffness is not None:
         return cm.stiffness
     if cm.duration is None:
         raise ValueError("contact_model: no stiffness or duration shared by every pair")
-    e = case.granule_hammer_contact.restitution
-    return LinearSpringDashpot.from_duration(cm.duration, e, case.granule_mass, cm.end).k
+    e, m = case.granule_hammer_contact.restitution, case.granule_mass
+    if cm.kind == "linear":
+        return LinearSpringDashpot.from_duration(cm.duration, e, m, cm.end).k
+    v = max(fastest_relative_speed(case), 1e-3)
+    unit = HertzTsuji.from_restitution(1.0, e, m, cm.end).impact(v).duration  # at k = 1
+    return (unit / cm.duration) ** 2.5 / math.sqrt(case.granules.radius)
 
 
 def effective_modulus(a: Material, b: Material) -> float:
@@ -124,11 +130,12 @@ def effective_modulus(a: Material, b: Material) -> float:
 
 def pair_stiffness(case: Case, a: str, b: str) -> float:
     """k_n of the soft contacts between materials ``a`` and ``b``: N/m (linear,
-    :func:`normal_stiffness`) or (4/3)E*, Pa (Hertz: contact_model.stiffness, else from the
-    materials' Young's moduli and Poisson's ratios, :func:`effective_modulus`); a Hertz
+    :func:`normal_stiffness`) or (4/3)E*, Pa (Hertz: from contact_model.stiffness or duration,
+    :func:`normal_stiffness`, else from the materials' Young's moduli and Poisson's ratios,
+    :func:`effective_modulus`); a Hertz
     contact's stiffness is this times √R*, R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
     cm = case.contact_model
-    if cm.kind == "hertz" and cm.stiffness is None:
+    if cm.kind == "hertz" and cm.stiffness is None and cm.duration is None:
         return 4.0 / 3.0 * effective_modulus(case.materials[a], case.materials[b])
     return normal_stiffness(case)
 
