@@ -212,9 +212,9 @@ def test_fed_run_conserves_granules_and_counts_what_left(separator_run: Path) ->
 
 
 def test_fed_run_ledger_closes_to_one_percent(separator_run: Path) -> None:
-    """Comb, feed, releases, screen: the ledger closes to the project's 1 % (measured -0.33 %
-    with the case's two granule substeps; -1.01 % with five: the hammers' velocity held
-    through the substeps, docs/reliability.md)."""
+    """Comb, feed, releases, screen: the ledger closes to the project's 1 % (measured -0.06 %
+    with the case's one granule step per machine step; -0.33 % with two substeps, -1.01 % with
+    five: the hammers' velocity held through the substeps, docs/reliability.md)."""
     summary = json.loads((separator_run / "summary.json").read_text())
     assert abs(summary["energy"]["closure"]) < 0.01
 
