@@ -659,7 +659,11 @@ class ContactModel(Strict):
         "or when the overlap does ('overlap', attractive force allowed; any e > 0)",
     )
     steps_per_contact: float = Field(
-        50.0, ge=10, le=1000, description="automatic step: t_c/steps_per_contact, in [10, 1000]"
+        50.0,
+        ge=10,
+        le=1000,
+        description="automatic step: t_c/steps_per_contact, in [10, 1000]; a heavily damped "
+        "contact takes more, 20 per dashpot time (e = 0.05: 120)",
     )
     granule_substeps: int = Field(
         1,
