@@ -94,6 +94,28 @@ def _validate(args: argparse.Namespace) -> int:
     return 2 if failed else 0
 
 
+def _new(args: argparse.Namespace) -> int:
+    from perga.case import CaseError, load_case
+    from perga.case.templates import TEMPLATES, write_template
+
+    if args.template not in TEMPLATES:
+        names = ", ".join(f"{k} ({v[1]})" for k, v in TEMPLATES.items())
+        return _problems([f"perga new: no template {args.template!r}; there are: {names}"])
+    try:
+        written = write_template(args.template, args.output, args.overwrite)
+    except FileExistsError as exc:
+        return _problems([str(exc)])
+    except OSError as exc:
+        return _problems([f"cannot write {args.output}: {exc.strerror or exc}"])
+    try:
+        load_case(args.output)
+    except CaseError as exc:  # a template that does not load is perga's defect
+        _problems(exc.problems)
+        return 1
+    print(f"wrote {', '.join(str(p) for p in written)}; next: perga run {args.output}")
+    return 0
+
+
 def _schema(args: argparse.Namespace) -> int:
     from perga.case.reference import json_schema, markdown_reference
 
@@ -669,6 +691,18 @@ def build_parser() -> argparse.ArgumentParser:
     metrics.add_argument("run", type=Path, nargs="?", metavar="RUN")
     metrics.add_argument("names", nargs="*", metavar="NAME")
     metrics.set_defaults(handler=_metrics)
+    new = sub.add_parser(
+        "new",
+        help="start a case from a commented template",
+        description="Write a commented case to start from (a bundled case, its geometry files "
+        "copied beside it). Templates: single-impact, rebound, separator, soft-separator, "
+        "fed-separator.",
+        epilog="example: perga new fed-separator -o my.toml && perga run my.toml",
+    )
+    new.add_argument("template", nargs="?", default="separator", help="default: separator")
+    new.add_argument("-o", "--output", type=Path, required=True, help="the case file to write")
+    new.add_argument("--overwrite", action="store_true", help="replace files in the way")
+    new.set_defaults(handler=_new)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)
