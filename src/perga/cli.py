@@ -116,6 +116,18 @@ def _new(args: argparse.Namespace) -> int:
     return 0
 
 
+def _report(args: argparse.Namespace) -> int:
+    from perga.case import CaseError
+    from perga.studies.run_report import write_run_report
+
+    try:
+        path = write_run_report(args.run, args.output)
+    except (FileNotFoundError, CaseError) as exc:
+        return _problems([str(exc)])
+    print(f"wrote {path} (figures beside it)")
+    return 0
+
+
 def _schema(args: argparse.Namespace) -> int:
     from perga.case.reference import json_schema, markdown_reference
 
@@ -703,6 +715,14 @@ def build_parser() -> argparse.ArgumentParser:
     new.add_argument("-o", "--output", type=Path, required=True, help="the case file to write")
     new.add_argument("--overwrite", action="store_true", help="replace files in the way")
     new.set_defaults(handler=_new)
+    report = sub.add_parser(
+        "report",
+        help="a run as a Markdown page with figures (RUN/report/report.md)",
+        epilog="example: perga run cases/separator.toml -o runs/sep && perga report runs/sep",
+    )
+    report.add_argument("run", type=Path, metavar="RUN", help="a run directory")
+    report.add_argument("-o", "--output", type=Path, help="folder (default: RUN/report)")
+    report.set_defaults(handler=_report)
     validate = sub.add_parser("validate", help="check case files: schema and physical cross-checks")
     validate.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     validate.set_defaults(handler=_validate)
