@@ -238,6 +238,13 @@ def _run(args: argparse.Namespace) -> int:
             f"granules: {pop['fed']} fed, {pop['released']} released from cells, "
             f"{pop['departed']} departed, {pop['broken']} broken, {pop['present']} present"
         )
+    facts = []
+    if summary.energy:
+        facts.append(f"energy ledger closes to {summary.energy['closure']:+.2%}")
+    if summary.speeds:
+        facts.append(f"granule speeds at the end {summary.speeds['mean']:.3g} m/s mean, "
+                     f"{summary.speeds['max']:.3g} max")  # fmt: skip
+    print("; ".join([*facts, f"figures: perga report {directory}"]))
     for warning in summary.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     if summary.status == LEDGER_OFF:

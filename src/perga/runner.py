@@ -77,6 +77,8 @@ class RunSummary:
     energy: dict[str, float] = field(default_factory=dict)
     threads: int = 1
     """CPU threads the contact model used."""
+    speeds: dict[str, float] = field(default_factory=dict)
+    """The granules' speeds at the end, m/s: mean and max (none present: empty)."""
     checkpoints: int = 0
     """Checkpoints written (RUN/checkpoints/, the last two kept)."""
     resumed: list[float] = field(default_factory=list)
@@ -417,6 +419,9 @@ def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path)
         summary.steps, summary.simulated_time = sim.steps, sim.time
         summary.steps_per_second = sim.steps / wall if wall > 0 else 0.0
         summary.impacts = len(sim.impacts)
+        speeds = np.hypot(*sim.granule_velocities().reshape(-1, 2).T)
+        if speeds.size:
+            summary.speeds = {"mean": float(speeds.mean()), "max": float(speeds.max())}
         summary.threads = sim.contacts.threads
         asked = sim.spec.contact_model.threads
         if asked is not None and summary.threads < asked:

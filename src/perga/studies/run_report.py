@@ -96,6 +96,9 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
         ("granule-hammer impacts", f"{s.get('impacts')}"),
         ("energy ledger closure", "not kept" if closure is None else f"{closure:+.3%}"),
     ]  # fmt: skip
+    if s.get("speeds"):
+        rows.append(("granule speeds at the end", f"{s['speeds']['mean']:.3g} m/s mean, "
+                                                  f"{s['speeds']['max']:.3g} m/s max"))  # fmt: skip
     if s.get("population"):
         rows.append(("population", ", ".join(f"{k} {v}" for k, v in s["population"].items())))
     lines = [f"# Run {run.name}", "", f"Case: `{s.get('case')}`", "", "| | |", "| --- | --- |"]
