@@ -153,6 +153,25 @@ def shown(override: str, most: int = 200) -> str:
     return f"{override[: most // 2]}... ({len(override)} characters)"
 
 
+def simulate(
+    case: str | Path,
+    directory: str | Path,
+    *,
+    overrides: tuple[str, ...] | list[str] = (),
+    overwrite: bool = False,
+) -> RunSummary:
+    """Run the case file ``case`` with ``overrides`` (``KEY=VALUE``, as ``--set`` takes them)
+    into ``directory``, as ``perga run CASE -o DIRECTORY`` does; returns the summary (also in
+    summary.json). CaseError for a bad case; FileExistsError for a directory that holds a
+    run, unless ``overwrite``."""
+    from perga.case import load_case
+
+    path, directory = Path(case), Path(directory)
+    loaded = load_case(path, overrides=list(overrides))
+    prepare_directory(directory, overwrite)
+    return run_case(loaded, path, directory)
+
+
 def prepare_directory(directory: Path, overwrite: bool) -> None:
     """Create the run directory; refuse a non-empty one unless ``overwrite`` (FileExistsError)."""
     if directory.exists() and any(directory.iterdir()):

@@ -6,6 +6,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -45,6 +46,20 @@ class Run:
     def omega(self) -> float:
         """Rotor angular velocity of the case, rad/s."""
         return self.case.rotor.angular_velocity
+
+    def dataframe(self, table: str) -> Any:
+        """Table ``table`` (granules, hammers, impacts or energy) as a pandas DataFrame, one
+        column per CSV column (SI units); needs pandas (``pip install 'perga[notebook]'``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError(
+                "Run.dataframe needs pandas (pip install 'perga[notebook]'); without it the "
+                f"tables are numpy columns: run.{table}['time'], ..."
+            ) from None
+        if table not in ("granules", "hammers", "impacts", "energy"):
+            raise ValueError(f"no table {table!r}: granules, hammers, impacts or energy")
+        return pd.DataFrame(getattr(self, table))
 
     def track(self, granule: int = 0) -> Columns:
         """One granule's rows of granules.csv: time (s), x, y (m), vx, vy (m/s), speed, ..."""
