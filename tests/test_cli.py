@@ -17,3 +17,16 @@ def test_workers_at_least_one(command: str, capsys: pytest.CaptureFixture[str]) 
             parser.parse_args([*base, "--workers", bad])
         assert stop.value.code == 2
         assert "--workers" in capsys.readouterr().err
+
+
+def test_the_help_examples_parse():
+    """Every command line in ``perga --help``'s examples is one the parser takes."""
+    import shlex
+
+    from perga.cli import EXAMPLES, build_parser
+
+    lines = [x.strip() for x in EXAMPLES.splitlines() if x.strip().startswith("perga ")]
+    assert len(lines) >= 7
+    for line in lines:
+        command = shlex.split(line.split("   ")[0])
+        build_parser().parse_args(command[1:])

@@ -26,6 +26,18 @@ if TYPE_CHECKING:
 
 BUNDLED_CASES = Path(__file__).resolve().parents[2] / "cases"
 
+EXAMPLES = """examples:
+  perga new fed-separator -o my.toml          a commented case to start from
+  perga validate my.toml                      every problem of a case, with the allowed range
+  perga run my.toml --set rotor.rpm=1500      simulate (any key overridden) into runs/my
+  perga report runs/my                        report.md with figures of the run
+  perga run --resume runs/my                  go on after a stop or a crash
+  perga sweep my.toml --set rotor.rpm=500:1700:4 --metric released_fraction -o sweep
+  perga window my.toml --set rotor.rpm=500:1700:4 --set hammers.mass=0.025:0.075:3 -o window
+
+exit status: 0 done, 1 a run that failed, 2 bad input, 3 a run whose energy ledger is off,
+128 + N after signal N. Every case key: docs/case-files.md (perga schema --markdown)."""
+
 
 def _default_case(name: str) -> Path:
     """A bundled case: ./cases/NAME if present, else the one beside the installed sources."""
@@ -562,7 +574,13 @@ def _metrics(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand."""
-    parser = argparse.ArgumentParser(prog="perga", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="perga",
+        description="perga: bee-bread granules struck by hammers on a rotor (2-D DEM), checked "
+        "against the analytical model. Every run is driven by a case file (TOML).",
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"perga {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     check = sub.add_parser(
