@@ -349,7 +349,16 @@ def _compare(args: argparse.Namespace) -> int:
     fitted = _default_case("paper-fitted.toml")
     if args.paper:
         work = args.work or out / "runs"
-        runs += run_paper_study(fitted.parent, work, args.processes)
+        bar = progress_bar(0, "runs", "perga compare --paper", args.quiet)
+
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        try:
+            runs += run_paper_study(fitted.parent, work, args.processes, progress)
+        finally:
+            bar.close()
     analyses = analyse(runs, Params.from_case(load_case(fitted)))
     command = "perga compare " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["compare"] else ""
     data = write_report(analyses, out, Params.from_case(load_case(fitted)), command)
@@ -657,6 +666,7 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("-o", "--output", type=Path, help="report folder (default reports/...)")
     compare.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
     compare.add_argument("--processes", type=int, default=2, help="--paper runs in parallel")
+    compare.add_argument("--quiet", action="store_true", help="no progress")
     compare.set_defaults(handler=_compare)
     sweep = sub.add_parser(
         "sweep",

@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -745,15 +745,36 @@ def _run_job(job: Job, work: Path) -> Path:
     return directory
 
 
-def run_jobs(jobs: Sequence[Job], work: Path, processes: int = 2) -> list[Path]:
-    """Run the jobs into ``work`` in a pool of ``processes``; the run directories in order."""
+def run_jobs(
+    jobs: Sequence[Job],
+    work: Path,
+    processes: int = 2,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Path]:
+    """Run the jobs into ``work`` in a pool of ``processes``; the run directories in order;
+    ``progress(done, total)`` after each."""
     work.mkdir(parents=True, exist_ok=True)
+    done: list[Path] = []
     if processes <= 1:
-        return [_run_job(job, work) for job in jobs]
+        runs: Iterable[Path] = (_run_job(job, work) for job in jobs)
+        for path in runs:
+            done.append(path)
+            if progress:
+                progress(len(done), len(jobs))
+        return done
     with ProcessPoolExecutor(max_workers=processes) as pool:
-        return list(pool.map(_run_job, jobs, [work] * len(jobs)))
+        for path in pool.map(_run_job, jobs, [work] * len(jobs)):
+            done.append(path)
+            if progress:
+                progress(len(done), len(jobs))
+    return done
 
 
-def run_paper_study(cases: Path, work: Path, processes: int = 2) -> list[Run]:
+def run_paper_study(
+    cases: Path,
+    work: Path,
+    processes: int = 2,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Run]:
     """Run (or reuse) every run of the paper report and load them."""
-    return [load_run(d) for d in run_jobs(paper_jobs(cases), work, processes)]
+    return [load_run(d) for d in run_jobs(paper_jobs(cases), work, processes, progress)]
