@@ -15,30 +15,16 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.contact.soft.helpers
+# the tests' helpers (tests.contact.soft.helpers, tests.test_soft_run) are imported from here
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.contact.soft.helpers import impact
+from tests.test_soft_run import hammer_restitution
 
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio
-from perga.case import load_case
 from perga.case.timestep import steps_for_damping
-from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
 
 E = (0.05, 0.1, 0.3, 0.6, 0.8, 0.95)
-CASE = Path(__file__).resolve().parents[1] / "cases" / "soft-single-granule.toml"
-
-
-def on_hammer(model: str, e: float, end: str, mass: float) -> float:
-    """e of the first granule-hammer impact (relative to the hammer's material point)."""
-    sets = [f"hammers.mass={mass}", f"contacts[0].restitution={e}", f'contact_model.end="{end}"',
-            f'contact_model.kind="{model}"', "contact_model.granule_substeps=1"]  # fmt: skip
-    sim = Simulation(scene_spec(load_case(CASE, overrides=sets)), track_energy=False)
-    with sim.contacts.running():
-        while not sim.impacts and sim.time < 0.05:
-            sim.step()
-    first = sim.impacts[0]
-    return -first.normal_velocity_after / first.normal_velocity_before
 
 
 def main() -> None:
@@ -53,7 +39,7 @@ def main() -> None:
                 impact(model, e, 10.0, kind, end=end, k_n=k, dt_fraction=fraction).e
                 for kind in ("wall", "pair")
             ]
-            hammers = [on_hammer(model, e, end, m) for m in (0.005, 0.2)]
+            hammers = [hammer_restitution(model, e, end, m) for m in (0.005, 0.2)]
             cells = " | ".join(f"{(x / e - 1):+.2%}" for x in kernel + hammers)
             print(f"| {model} | {e} | {end} | {cells} |", flush=True)
 

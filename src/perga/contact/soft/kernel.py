@@ -237,8 +237,8 @@ def pair_force(
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        r_eff = r[i] * r[j] / rs
-        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], r_eff, rs - math.sqrt(d2), xi)
+        gap = rs - math.sqrt(d2)
+        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], r[i] * r[j] / rs, gap, xi)
     if d2 > 0.0:
         d = math.sqrt(d2)
         nx = dx / d
@@ -253,13 +253,13 @@ def pair_force(
     delta = rs - d
     a = mat[i]
     b = mat[j]
-    r_eff = r[i] * r[j] / rs
     if not touching(delta, ddelta, dt):
         xi = hist[k]
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r_eff, delta, xi)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r[i] * r[j] / rs, delta, xi)
+    r_eff = r[i] * r[j] / rs
     m_eff = m[i] * m[j] / (m[i] + m[j])
     wi = w[i] + h * a_prev[i, 2]
     wj = w[j] + h * a_prev[j, 2]
