@@ -209,8 +209,9 @@ def report_text(result: WindowResult) -> str:
     ax, ay = result.window.axes
     noted = [p for p in result.points if p.notes]
     if noted:
-        lines += ["", "## Notes", "", "Metrics some runs could not give, runs whose energy ledger "
-                  "missed 1 %, and failed runs, by point:", ""]  # fmt: skip
+        lines += ["", "## Notes", "", "Metrics some runs could not give, and runs that failed "
+                  "or ended with their energy ledger off (left out of the means), by point:",
+                  ""]  # fmt: skip
         lines += [f"- {ax} = {p.x:g}, {ay} = {p.y:g}: {'; '.join(p.notes)}" for p in noted]
     lines += ["", "Files: window.parquet, window.csv, window.png, results.parquet, runs/.", ""]
     return "\n".join(lines)
