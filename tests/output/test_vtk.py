@@ -78,7 +78,7 @@ def spec_near_hammer(soft: bool) -> SceneSpec:
     if not soft:
         return dataclasses.replace(spec, granules=tuple(granules))
     granules.append(dataclasses.replace(g, position=(0.11 + 2 * g.radius - 1e-4, 0.013)))
-    pair = ContactSpec(g.material, g.material, 0.7, 0.35)
+    pair = ContactSpec(g.material, g.material, 0.7, 0.35, spec.contacts[0].stiffness)
     return dataclasses.replace(
         spec, granules=tuple(granules), contacts=(*spec.contacts, pair), granule_collisions=True
     )

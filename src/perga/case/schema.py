@@ -663,7 +663,8 @@ class ContactModel(Strict):
         ge=10,
         le=1000,
         description="automatic step: t_c/steps_per_contact, in [10, 1000]; a heavily damped "
-        "contact takes more, 20 per dashpot time (e = 0.05: 120)",
+        "contact takes more, in proportion to its damping (at 50: 20 per dashpot time, e = "
+        "0.05 takes 120)",
     )
     granule_substeps: int = Field(
         1,
