@@ -15,14 +15,11 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
 from perga import __version__
-from perga.progress import progress_bar
+from perga.progress import counted, progress_bar
 from perga.stopping import StopRequest, StopSignal, exit_status, raise_on_stop_signals
-
-if TYPE_CHECKING:
-    pass
 
 BUNDLED_CASES = Path(__file__).resolve().parents[2] / "cases"
 
@@ -350,13 +347,8 @@ def _compare(args: argparse.Namespace) -> int:
     if args.paper:
         work = args.work or out / "runs"
         bar = progress_bar(0, "runs", "perga compare --paper", args.quiet)
-
-        def progress(done: int, total: int) -> None:
-            bar.total = total
-            bar.update(done - bar.n)
-
         try:
-            runs += run_paper_study(fitted.parent, work, args.processes, progress)
+            runs += run_paper_study(fitted.parent, work, args.processes, counted(bar))
         finally:
             bar.close()
     analyses = analyse(runs, Params.from_case(load_case(fitted)))
@@ -432,13 +424,8 @@ def _with_progress(args: argparse.Namespace, call: Callable[[Callable[[int, int]
     """``call(progress)`` under a progress bar (unless ``args.quiet``); after a stop signal it
     says where the finished runs are and how to resume, and re-raises."""
     bar = progress_bar(0, "runs", f"perga {args.command}", args.quiet)
-
-    def progress(done: int, total: int) -> None:
-        bar.total = total
-        bar.update(done - bar.n)
-
     try:
-        return call(progress)
+        return call(counted(bar))
     except KeyboardInterrupt:
         bar.close()
         print(

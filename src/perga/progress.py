@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from typing import Any, Protocol
 
 LINE_EVERY = 10.0
@@ -76,6 +77,16 @@ class _Silent:
 
     def close(self) -> None:
         pass
+
+
+def counted(bar: Progress) -> Callable[[int, int], None]:
+    """A ``progress(done, total)`` callback (the studies' and compare's) that moves ``bar``."""
+
+    def progress(done: int, total: int) -> None:
+        bar.total = total
+        bar.update(done - bar.n)
+
+    return progress
 
 
 def progress_bar(total: float, unit: str, label: str, quiet: bool, **bar: Any) -> Progress:

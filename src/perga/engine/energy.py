@@ -31,8 +31,8 @@ The terms:
   at each hinge and −J·v̄_rotor at a driven rotor's axis per step (:func:`_pivot_work`; J the
   pin's impulse, read raw through :class:`~perga.engine.chipmunk_state.JointImpulses`): an
   ideal pin does none; Chipmunk's pulls the drifting anchors together and does, first order
-  in dt. Unbooked, it was the whole
-  residual before a run's first impact (docs/reliability.md).
+  in dt. Unbooked, it was the whole residual before a run's first impact
+  (docs/reliability.md).
 * ``closure`` = (drive_work + gravity_work + joint_correction − ΔKE − Δelastic −
   contact_dissipation − friction − drag) / max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|,
   ½Σ_i|ΔKE_i|, 1e-30 J): what the steps lose or make besides that (the first-order split of
