@@ -8,13 +8,17 @@ mid-write.
 exception inside a library's import can leave it half made), and inside a run, to the next step
 boundary (a KeyboardInterrupt raised inside a Pymunk callback is swallowed by cffi, and one
 raised in the middle of a frame's writes would cut a table row). A second signal while one is
-pending raises at once (a step that never ends can still be stopped). Standard library only, so
-that the command line can import it before anything heavy.
+pending raises at once (a step that never ends can still be stopped). A :class:`StopSignal`
+raised where Python swallows exceptions (a garbage-collector callback, such as the one
+``distributed`` installs, or a ``__del__``) is kept and raised by :func:`raise_swallowed` at the
+next safe point. Standard library only, so that the command line can import it before anything
+heavy.
 """
 
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from types import FrameType
 
@@ -52,11 +56,34 @@ def _raise(signum: int, _frame: FrameType | None) -> None:
     raise StopSignal(signum)
 
 
+_swallowed: list[int] = []
+"""Stop signals whose StopSignal Python swallowed (:func:`_keep_swallowed`), oldest first."""
+
+
+def _keep_swallowed(unraisable: sys.UnraisableHookArgs) -> None:
+    """``sys.unraisablehook``: keep a swallowed StopSignal for :func:`raise_swallowed`; report
+    anything else as Python would."""
+    if isinstance(unraisable.exc_value, StopSignal):
+        _swallowed.append(unraisable.exc_value.signum)
+    else:
+        sys.__unraisablehook__(unraisable)
+
+
+def raise_swallowed() -> None:
+    """Raise, as :class:`StopSignal`, a stop signal that Python swallowed, if any."""
+    if _swallowed:
+        signum = _swallowed[0]
+        _swallowed.clear()
+        raise StopSignal(signum)
+
+
 def raise_on_stop_signals() -> None:
-    """From now on each stop signal raises :class:`StopSignal` (main thread only)."""
+    """From now on each stop signal raises :class:`StopSignal` (main thread only), and one
+    raised where Python swallows exceptions is kept for :func:`raise_swallowed`."""
     if threading.current_thread() is threading.main_thread():
         for signum in STOP_SIGNALS:
             signal.signal(signum, _raise)
+        sys.unraisablehook = _keep_swallowed
 
 
 class StopRequest:

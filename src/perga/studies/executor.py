@@ -11,7 +11,9 @@ system the workers and this process share.
 :func:`execute` submits every job, hands each finished row to a callback as it arrives and
 returns when all are done. A worker that dies mid-run is the scheduler's concern: its runs go
 to another worker; rows already received are kept. Ctrl-C cancels what has not finished and
-raises KeyboardInterrupt after the rows received so far were handed over.
+raises KeyboardInterrupt after the rows received so far were handed over (one that Python
+swallowed in a callback of ``distributed``'s is raised after the next row,
+:func:`perga.stopping.raise_swallowed`).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import Any
 
 from distributed import Client, LocalCluster, as_completed
 
+from perga.stopping import raise_swallowed
 from perga.studies.jobs import Job, failed_row, run_job
 
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
@@ -85,6 +88,7 @@ def execute(
                 on_row(failed_row(job_of[future.key], repr(future.exception())))
             else:
                 on_row(future.result())
+            raise_swallowed()
     except BaseException:
         client.cancel(futures)
         raise
