@@ -100,7 +100,7 @@ def test_sweep_on_a_cluster_survives_a_killed_worker(cluster, tmp_path: Path) ->
     assert killed.is_set() and workers[0].wait(timeout=10) == -signal.SIGKILL
     assert len(result.rows) == 8 and result.failed == 0
     table = pq.read_table(result.path).to_pydict()
-    assert table["status"] == ["ok"] * 12
+    assert table["status"] == ["ok"] * 8
     for row in result.rows:
         assert (Path(row["directory"]) / "row.json").exists()
         assert row["first_impact_restitution"] == pytest.approx(0.7, abs=1e-12)
