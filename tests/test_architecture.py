@@ -21,7 +21,7 @@ ALLOWED: dict[str, set[str]] = {
     "output": {"output", "model", "geometry", "analytic"},
     "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
-                "runner", "__init__"},
+                "runner", "stopping", "__init__"},
     "runner": {"runner", "case", "model", "engine", "geometry", "output", "stopping",
                "checkpoints"},
     "checkpoints": {"checkpoints", "engine", "output", "__init__"},

@@ -3,13 +3,13 @@
     xvfb-run -a pvbatch postprocess/paraview/render_run.py RUN [--time T] [-o PNG]
         [--animation DIR] [--gaussian] [--3d] [--state FILE.pvsm] [--no-bar]
 
-Reads RUN/vtk/ (written by perga.output.vtk): granules drawn at their true size as filled
-circles (``Glyph``, '2D Glyph' circle scaled by ``radius``, ScaleFactor 2 = diameter) coloured
-by ``speed``; hammers as grey surfaces, the rotor disc and the chamber as lines. ``--gaussian``
-uses the Point Gaussian representation instead (the interactive choice; under Mesa/xvfb it
-draws nothing, design notes section 6). ``--state`` saves the scene as a ParaView state file
-for interactive use (File > Load State; "Search files under specified directory" re-targets it
-to another run). Prints the time steps and granule arrays it found.
+The 2-D picture is the run's own ParaView state, RUN/vtk/paraview_state.py (written by perga
+with each run, perga.output.paraview_scene): granules at their true size as filled discs
+coloured by ``speed``, hammers grey, the rotor disc's outline, the chamber's lines.
+``--gaussian`` draws the granules with the Point Gaussian representation instead (the
+interactive choice; under Mesa/xvfb it draws nothing, design notes section 6). ``--state``
+also saves the scene as a ParaView state file (.pvsm). Prints the time steps and granule arrays
+it found.
 
 ``--3d`` renders the 3-D view of a run made with ``output.vtk_3d = true`` (perga.output.vtk3d)
 from an oblique camera: hammers (orange) and rotor disc (grey) as lit surfaces extruded to
@@ -22,12 +22,12 @@ printed).
 """
 
 import argparse
+import runpy
 import sys
 from pathlib import Path
 
 from paraview import simple as pv
 
-GREY = [0.5, 0.5, 0.5]
 HAMMER_3D = [0.85, 0.45, 0.15]
 ROTOR_3D = [0.6, 0.62, 0.65]
 
@@ -50,86 +50,32 @@ def main() -> None:
     args = parser.parse_args()
     vtk = args.run / "vtk"
 
-    if args.three_d and not (vtk / "machine3d.pvd").exists():
-        sys.exit(f"{vtk / 'machine3d.pvd'} is missing: run the case with output.vtk_3d = true")
-    granules = pv.PVDReader(FileName=str(vtk / "granules.pvd"))
-    machine = pv.PVDReader(FileName=str(vtk / ("machine3d.pvd" if args.three_d else "machine.pvd")))
-    times = list(granules.TimestepValues)
-    arrays = sorted(granules.PointData.keys())
-    print(f"time steps: {len(times)} ({times[0]:.6g} .. {times[-1]:.6g} s)")
-    print("granule arrays: " + ", ".join(arrays))
-
     view = pv.CreateView("RenderView")
     view.ViewSize = list(args.size)
-    view.UseColorPaletteForBackground = 0
-    view.Background = [1.0, 1.0, 1.0]
-    view.OrientationAxesVisibility = 0
+    pv.SetActiveView(view)
     if args.three_d:
-        shown = pv.Show(cylinders(granules), view)
-    elif args.gaussian:
-        shown = pv.Show(granules, view)
-        shown.SetRepresentationType("Point Gaussian")
-        shown.ShaderPreset = "Plain circle"
-        shown.ScaleByArray = 1
-        shown.SetScaleArray = ["POINTS", "radius"]
-        shown.GaussianRadius = 1.0
+        shown = scene_3d(vtk, view)
     else:
-        glyph = pv.Glyph(Input=granules, GlyphType="2D Glyph")
-        glyph.GlyphType.GlyphType = "Circle"
-        glyph.GlyphType.Filled = 1
-        glyph.ScaleArray = ["POINTS", "radius"]
-        glyph.ScaleFactor = 2.0
-        glyph.GlyphMode = "All Points"
-        shown = pv.Show(glyph, view)
-    pv.ColorBy(shown, ("POINTS", "speed"))
+        state = vtk / "paraview_state.py"
+        if not state.exists():
+            sys.exit(f"{state} is missing: run the case again with this perga")
+        runpy.run_path(str(state))
+        shown = pv.GetDisplayProperties(pv.FindSource("granules at true size"), view)
+        if args.gaussian:
+            pv.Hide(pv.FindSource("granules at true size"), view)
+            shown = gaussian(pv.FindSource("granules"), view)
+    granules = pv.FindSource("granules")
+    times = list(granules.TimestepValues)
+    print(f"time steps: {len(times)} ({times[0]:.6g} .. {times[-1]:.6g} s)")
+    print("granule arrays: " + ", ".join(sorted(granules.PointData.keys())))
     shown.SetScalarBarVisibility(view, not args.no_bar)
-    lut = pv.GetColorTransferFunction("speed")
-    lut.ApplyPreset("Viridis (matplotlib)", True)  # no greys: granules stand out from hammers
-    bar = pv.GetScalarBar(lut, view)
-    bar.Title, bar.ComponentTitle = "speed, m/s", ""
-    bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
-    bar.Visibility = int(not args.no_bar)
-    # 2-D: hammers (cell id >= 0) as grey surfaces; the rotor disc (id -1), under the granules,
-    # as its outline only. 3-D: both solid, hammers orange (told apart from the viridis
-    # granules and the grey disc)
-    parts = (
-        ((0.0, 1e9, "Surface", HAMMER_3D), (-1.0, -1.0, "Surface", ROTOR_3D))
-        if args.three_d
-        else ((0.0, 1e9, "Surface", GREY), (-1.0, -1.0, "Wireframe", GREY))
-    )
-    for lower, upper, style, colour in parts:
-        part = pv.Threshold(Input=machine, Scalars=["CELLS", "id"])
-        part.LowerThreshold, part.UpperThreshold = lower, upper
-        machine_shown = pv.Show(part, view)
-        machine_shown.SetRepresentationType(style)
-        machine_shown.ColorArrayName = ["POINTS", ""]
-        machine_shown.AmbientColor = machine_shown.DiffuseColor = colour
-        if args.three_d and lower < 0:
-            # a disc as thick as the hammers shares their faces: drawn 2 % thinner (display
-            # only), the hammers' faces are the ones seen
-            machine_shown.Scale = [1.0, 1.0, 0.98]
-    chamber_file = vtk / ("chamber3d.vtu" if args.three_d else "chamber.vtu")
-    if chamber_file.exists():
-        chamber = pv.Show(pv.XMLUnstructuredGridReader(FileName=[str(chamber_file)]), view)
-        chamber.ColorArrayName = ["POINTS", ""]
-        chamber.AmbientColor = chamber.DiffuseColor = [0.2, 0.2, 0.2]
-        chamber.LineWidth = 2.0
-        if args.three_d:
-            chamber.Opacity = 0.3
 
     scene = pv.GetAnimationScene()
     scene.UpdateAnimationUsingDataTimeSteps()
     time = times[-1] if args.time is None else min(times, key=lambda t: abs(t - args.time))
     scene.AnimationTime = time
-    shown.RescaleTransferFunctionToDataRange(False, True)
-    if args.three_d:
-        # oblique: from below the rotor's -y side, 50° above the plane, z up on the screen
-        view.InteractionMode = "3D"
-        view.CameraFocalPoint = [0.0, 0.0, 0.0]
-        view.CameraPosition = [0.0, -0.64, 0.77]
-        view.CameraViewUp = [0.0, 0.0, 1.0]
-    else:
-        view.InteractionMode = "2D"
+    if args.three_d:  # the 2-D state's colours run from 0 to the run's top speed
+        shown.RescaleTransferFunctionToDataRange(False, True)
     view.ResetCamera()
     output = args.output or args.run / "paraview.png"
     pv.SaveScreenshot(str(output), view, ImageResolution=list(args.size))
@@ -141,6 +87,56 @@ def main() -> None:
         args.animation.mkdir(parents=True, exist_ok=True)
         pv.SaveAnimation(str(args.animation / "frame.png"), view, ImageResolution=list(args.size))
         print(f"wrote the animation frames into {args.animation}")
+
+
+def gaussian(granules, view):
+    """The granules as Point Gaussian circles of their radius, coloured as the discs are."""
+    shown = pv.Show(granules, view)
+    shown.SetRepresentationType("Point Gaussian")
+    shown.ShaderPreset = "Plain circle"
+    shown.ScaleByArray = 1
+    shown.SetScaleArray = ["POINTS", "radius"]
+    shown.GaussianRadius = 1.0
+    pv.ColorBy(shown, ("POINTS", "speed"))
+    return shown
+
+
+def scene_3d(vtk, view):
+    """The 3-D scene (module doc); the granules' display."""
+    if not (vtk / "hammers3d.pvd").exists():
+        sys.exit(f"{vtk / 'hammers3d.pvd'} is missing: run the case with output.vtk_3d = true")
+    view.UseColorPaletteForBackground = 0
+    view.Background = [1.0, 1.0, 1.0]
+    view.OrientationAxesVisibility = 0
+    granules = pv.PVDReader(registrationName="granules", FileName=str(vtk / "granules.pvd"))
+    shown = pv.Show(cylinders(granules), view)
+    pv.ColorBy(shown, ("POINTS", "speed"))
+    lut = pv.GetColorTransferFunction("speed")
+    lut.ApplyPreset("Viridis (matplotlib)", True)  # no greys: granules stand out from the disc
+    bar = pv.GetScalarBar(lut, view)
+    bar.Title, bar.ComponentTitle = "speed, m/s", ""
+    bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
+    # hammers orange (told apart from the viridis granules and the grey disc)
+    for name, colour in (("hammers3d", HAMMER_3D), ("rotor3d", ROTOR_3D)):
+        part = pv.PVDReader(registrationName=name, FileName=str(vtk / f"{name}.pvd"))
+        part_shown = pv.Show(part, view)
+        part_shown.ColorArrayName = ["POINTS", ""]
+        part_shown.AmbientColor = part_shown.DiffuseColor = colour
+    # a disc as thick as the hammers shares their faces: drawn 2 % thinner (display only), the
+    # hammers' faces are the ones seen
+    pv.GetDisplayProperties(pv.FindSource("rotor3d"), view).Scale = [1.0, 1.0, 0.98]
+    if (vtk / "chamber3d.vtu").exists():
+        wall = pv.XMLUnstructuredGridReader(FileName=[str(vtk / "chamber3d.vtu")])
+        chamber = pv.Show(wall, view)
+        chamber.ColorArrayName = ["POINTS", ""]
+        chamber.AmbientColor = chamber.DiffuseColor = [0.2, 0.2, 0.2]
+        chamber.Opacity = 0.3
+    # oblique: from below the rotor's -y side, 50° above the plane, z up on the screen
+    view.InteractionMode = "3D"
+    view.CameraFocalPoint = [0.0, 0.0, 0.0]
+    view.CameraPosition = [0.0, -0.64, 0.77]
+    view.CameraViewUp = [0.0, 0.0, 1.0]
+    return shown
 
 
 def cylinders(granules):

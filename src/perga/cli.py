@@ -254,6 +254,9 @@ def _run(args: argparse.Namespace) -> int:
         facts.append(f"granule speeds at the end {summary.speeds['mean']:.3g} m/s mean, "
                      f"{summary.speeds['max']:.3g} max")  # fmt: skip
     print("; ".join([*facts, f"figures: perga report {directory}"]))
+    state = directory / "vtk" / "paraview_state.py"
+    if state.exists():
+        print(f"ParaView: paraview --state={state}")
     for warning in summary.warnings:
         print(f"warning: {warning}", file=sys.stderr)
     if summary.status == LEDGER_OFF:

@@ -1,5 +1,6 @@
-"""The real client: ParaView's pvbatch opens a run written by perga and renders it (skipped,
-saying why, where ParaView or xvfb-run is absent; .ci/run installs Debian's paraview and xvfb)."""
+"""The real client: ParaView (its GUI, ``paraview``, and ``pvbatch``) opens a run written by perga
+and renders it (skipped, saying why, where ParaView or xvfb-run is absent; .ci/run installs
+Debian's paraview, python3-paraview and xvfb)."""
 
 import shutil
 import subprocess
@@ -16,9 +17,21 @@ SCRIPT = ROOT / "postprocess" / "paraview" / "render_run.py"
 OUTPUT_3D = "\n[output]\nvtk_3d = true\n"
 
 pytestmark = pytest.mark.skipif(
-    shutil.which("pvbatch") is None or shutil.which("xvfb-run") is None,
-    reason="ParaView's pvbatch or xvfb-run is not installed (apt-get install paraview xvfb)",
+    any(shutil.which(p) is None for p in ("paraview", "pvbatch", "xvfb-run")),
+    reason="ParaView or xvfb-run is not installed (apt-get install paraview python3-paraview xvfb)",
 )
+GUI_DRIVER = """
+import os
+from paraview import simple as pv
+state = open({state!r}).read()
+# as File > Load State does: its text, with __file__ the state's path
+exec(compile(state, "<state>", "exec"), {{"__name__": "__main__", "__file__": {state!r}}})
+scene = pv.GetAnimationScene()
+scene.AnimationTime = scene.TimeKeeper.TimestepValues[-1]
+pv.SaveScreenshot({png!r}, pv.GetActiveView(), ImageResolution=[900, 900])
+open({names!r}, "w").write("\\n".join(sorted(k[0] for k in pv.GetSources())))
+os._exit(0)  # the GUI would wait for its user
+"""
 
 
 @pytest.fixture(scope="module")
@@ -31,6 +44,56 @@ def run(tmp_path_factory):
     run = tmp_path / "run"
     assert main(["run", str(case), "-o", str(run), "--quiet"]) == 0
     return run
+
+
+def gui(*options: str) -> subprocess.CompletedProcess:
+    """The ParaView GUI under xvfb with ``options`` (user settings ignored, ``--dr``)."""
+    result = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "paraview", "--dr", *options],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    return result
+
+
+def coloured_pixels(png: Path, margin: int = 0) -> int:
+    """Pixels of ``png`` with colour (max − min channel > 0.3): viridis granules (and a colour
+    bar), never the grey machine, the dark chamber or the white background; ``margin`` px at
+    each side left out."""
+    rgb = mpimg.imread(png)[..., :3]
+    h, w = rgb.shape[:2]
+    rgb = rgb[margin : h - margin, margin : w - margin]
+    return int(np.sum(rgb.max(axis=2) - rgb.min(axis=2) > 0.3))
+
+
+def test_the_state_written_with_the_run_opens_in_the_paraview_gui(run, tmp_path):
+    """RUN/vtk/paraview_state.py: ParaView's GUI loads it as a state (``--state``, its Load
+    State path) without a Python error; executed in the GUI's Python as Load State does, it
+    makes one source per file and a picture of the granules at their true size. Counted in the
+    900 × 900 picture: the granules' colours in its central 600 × 600 px (the colour bar, ~8,000
+    coloured px, is outside it) (300 discs 2.5 mm in radius, the 0.4 m chamber in
+    ~640 px: ~8 px across, ~50 px each; asserted 30 each), the grey hammers (six 60 × 20 mm
+    plates, ~3,000 px each: asserted 1,500 each)."""
+    state = run / "vtk" / "paraview_state.py"
+    empty = tmp_path / "empty.xml"
+    empty.write_text('<?xml version="1.0" ?>\n<pqevents>\n</pqevents>\n')
+    loaded = gui(f"--state={state}", f"--test-script={empty}", "--exit")
+    assert "Traceback" not in loaded.stdout + loaded.stderr, loaded.stdout + loaded.stderr
+    png, names = tmp_path / "gui.png", tmp_path / "sources.txt"
+    driver = tmp_path / "driver.py"
+    driver.write_text(GUI_DRIVER.format(state=str(state), png=str(png), names=str(names)))
+    gui(f"--script={driver}")
+    sources = names.read_text().split("\n")
+    assert sources == sorted(
+        ["chamber", "granules", "granules at true size", "hammers", "rotor", "unit disc"]
+    )
+    assert coloured_pixels(png, margin=150) > 300 * 30  # the colour bar is outside, x > 780
+    rgb = mpimg.imread(png)[..., :3]
+    grey = np.all(np.abs(rgb - 0.5) < 0.03, axis=2)  # the hammers' unlit grey, 0.5
+    assert int(grey.sum()) > 6 * 1500, int(grey.sum())
 
 
 def pvbatch(run, *options):
@@ -59,9 +122,7 @@ def test_pvbatch_reads_the_series_and_renders_the_granules(run, tmp_path):
     # without the colour bar the granules (viridis: no greys) are the only coloured things
     # (hammers, rotor outline, chamber grey, background white): 300 discs 2.5 mm in radius, the
     # 0.4 m chamber fitted into ~640 px, are ~8 px across, ~50 px each; asserted: 30 each
-    rgb = mpimg.imread(png)[..., :3]
-    coloured = int(np.sum(rgb.max(axis=2) - rgb.min(axis=2) > 0.3))
-    assert coloured > 300 * 30, coloured
+    assert coloured_pixels(png) > 300 * 30
 
 
 def test_pvbatch_renders_the_3d_machine(run, tmp_path):

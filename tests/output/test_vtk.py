@@ -7,6 +7,7 @@ the writer poses from the frame (hinge and axis angle, SI) and the test from Pym
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import gc
 import json
@@ -168,9 +169,10 @@ def simulate(directory: Path, kind: str) -> Run:
         frames.append(snapshot(sim))
         recorder.record(sim.frame(), sim.events())
         pvds.append(read_pvd(directory / "vtk" / "granules.pvd"))
-        assert read_pvd(directory / "vtk" / "machine.pvd") == [
-            (t, f.replace("granules", "machine")) for t, f in pvds[-1]
-        ]
+        for part in ("hammers", "rotor"):
+            assert read_pvd(directory / "vtk" / f"{part}.pvd") == [
+                (t, f.replace("granules", part)) for t, f in pvds[-1]
+            ]
     recorder.close()
     return Run(sim, directory / "vtk", frames, pvds)
 
@@ -249,35 +251,51 @@ def test_scene_is_exercised(run: Run) -> None:
         assert any(hammer)  # both granules on the hammer, not on each other
 
 
-def test_machine_frames_round_trip(run: Run) -> None:
+def _check_polygons(file: Path, outlines: list[np.ndarray], expected: dict[str, list]) -> None:
+    """``file`` (read by meshio and pyvista) holds ``outlines`` as polygons with ``expected``
+    cell data, exactly."""
+    m, p = both(file)
+    assert p.n_cells == len(outlines)
+    for k, outline in enumerate(outlines):
+        cell = p.get_cell(k)
+        assert cell.type == pv.CellType.POLYGON
+        np.testing.assert_allclose(p.points[cell.point_ids, :2], outline, rtol=0, atol=1e-15)
+    flat = np.concatenate([c.data.ravel() for c in m.cells])
+    np.testing.assert_array_equal(
+        m.points[flat],
+        p.points[np.concatenate([p.get_cell(k).point_ids for k in range(len(outlines))])],
+    )
+    assert sorted(p.cell_data.keys()) == sorted(expected)
+    for name, value in expected.items():
+        np.testing.assert_array_equal(p.cell_data[name], value, err_msg=name)
+        np.testing.assert_array_equal(np.concatenate(m.cell_data[name]), value, err_msg=name)
+
+
+def test_hammer_and_rotor_frames_round_trip(run: Run) -> None:
+    """Each frame's hammers (hammers.pvd) and rotor disc (rotor.pvd), in series of their own,
+    posed as the simulation has them."""
     spec = run.sim.spec
-    for (_, file), frame in zip(read_pvd(run.directory / "machine.pvd"), run.frames, strict=True):
-        m, p = both(run.directory / file)
+    hammers, rotors = read_pvd(run.directory / "hammers.pvd"), read_pvd(run.directory / "rotor.pvd")
+    for (_, h), (_, r), frame in zip(hammers, rotors, run.frames, strict=True):
         theta = frame.rotor_angle
-        phi = theta + 2 * np.pi * np.arange(ROTOR_SIDES) / ROTOR_SIDES
-        rotor = spec.rotor.radius * np.column_stack((np.cos(phi), np.sin(phi)))
-        outlines = [*frame.hammer_vertices, rotor]
-        for k, outline in enumerate(outlines):
-            cell = p.get_cell(k)
-            assert cell.type == pv.CellType.POLYGON
-            np.testing.assert_allclose(p.points[cell.point_ids, :2], outline, rtol=0, atol=1e-15)
-        flat = np.concatenate([c.data.ravel() for c in m.cells])
-        np.testing.assert_array_equal(
-            m.points[flat],
-            p.points[np.concatenate([p.get_cell(k).point_ids for k in range(len(outlines))])],
-        )
         n = len(frame.swing_angles)
         mounts = np.array([h.angle_on_rotor for h in spec.hammers])
-        expected = {
-            "id": [*range(n), -1],
-            "swing_angle": [*frame.swing_angles, 0.0],
-            "angle": [*(theta + mounts + frame.swing_angles), theta],
-            "angular_velocity": [*frame.hammer_spin, frame.rotor_spin],
-            "hinge_force": [*frame.hinge_force, 0.0],
-        }
-        for name, value in expected.items():
-            np.testing.assert_array_equal(p.cell_data[name], value, err_msg=name)
-            np.testing.assert_array_equal(np.concatenate(m.cell_data[name]), value, err_msg=name)
+        _check_polygons(
+            run.directory / h,
+            frame.hammer_vertices,
+            {
+                "id": [*range(n)],
+                "swing_angle": [*frame.swing_angles],
+                "angle": [*(theta + mounts + frame.swing_angles)],
+                "angular_velocity": [*frame.hammer_spin],
+                "hinge_force": [*frame.hinge_force],
+            },
+        )
+        phi = theta + 2 * np.pi * np.arange(ROTOR_SIDES) / ROTOR_SIDES
+        disc = spec.rotor.radius * np.column_stack((np.cos(phi), np.sin(phi)))
+        _check_polygons(
+            run.directory / r, [disc], {"angle": [theta], "angular_velocity": [frame.rotor_spin]}
+        )
     assert any(f.hinge_force[0] > 0 for f in run.frames[1:])
 
 
@@ -448,3 +466,20 @@ def test_interrupted_run_gets_its_trajectories(tmp_path: Path) -> None:
     assert trajectories.n_points == summary["frames"] == len(read_pvd(out / "vtk" / "granules.pvd"))
     assert summary["frames"] >= 11
     assert (out / "vtk" / ".trajectories.f8").exists()
+
+
+def test_the_paraview_state_names_the_series_and_the_top_speed(run: Run) -> None:
+    """paraview_state.py (opened in real ParaView by tests/output/test_paraview.py): the scene
+    script and a call on the series beside it, coloured up to the run's top speed, no path of
+    this machine in it (two runs of a case write the same bytes)."""
+    text = (run.directory / "paraview_state.py").read_text()
+    tree = ast.parse(text)
+    call = tree.body[-1].value
+    assert isinstance(call, ast.Call) and call.func.id == "show_run"
+    assert ast.unparse(call.args[0]) == "Path(__file__).resolve().parent"
+    keywords = {k.arg: ast.literal_eval(k.value) for k in call.keywords}
+    top = max(float(np.hypot(*f.velocities.T).max()) for f in run.frames)
+    assert keywords == {"speed_max": top, "chamber": True}
+    assert str(run.directory) not in text and "/tmp" not in text
+    for name in ("granules.pvd", "hammers.pvd", "rotor.pvd", "chamber.vtu"):
+        assert f'"{name}"' in text and (run.directory / name).exists()

@@ -38,7 +38,7 @@ FRAMES = 8
 STEPS_PER_FRAME = 40
 POSE_ATOL = 1e-12
 VOLUME_RTOL = 1e-9
-FILES_3D = ("machine3d.pvd", "chamber3d.vtu")
+FILES_3D = ("hammers3d.pvd", "rotor3d.pvd", "chamber3d.vtu")
 
 
 def with_3d(case: Case) -> Case:
@@ -105,63 +105,69 @@ def test_option_needs_vtk() -> None:
         type(load_case(CASES / "separator.toml").output)(record=("granules",), vtk_3d=True)
 
 
-def test_machine3d_pvd_has_the_machine_times(run3d: Run3D) -> None:
-    entries = read_pvd(run3d.directory / "machine3d.pvd")
-    assert entries == [(f.time, f"machine3d_{k:06d}.vtu") for k, f in enumerate(run3d.frames)]
-    assert [t for t, _ in read_pvd(run3d.directory / "machine.pvd")] == [t for t, _ in entries]
+def test_3d_series_have_the_2d_times(run3d: Run3D) -> None:
+    for part in ("hammers", "rotor"):
+        entries = read_pvd(run3d.directory / f"{part}3d.pvd")
+        expected = [(f.time, f"{part}3d_{k:06d}.vtu") for k, f in enumerate(run3d.frames)]
+        assert entries == expected
+        assert [t for t, _ in read_pvd(run3d.directory / f"{part}.pvd")] == [t for t, _ in entries]
 
 
-def part_cells(mesh: pv.UnstructuredGrid, part: int) -> tuple[np.ndarray, np.ndarray]:
-    """Points (k, 3) and triangles (m, 3) of the cells whose ``id`` is ``part``."""
-    cells = np.flatnonzero(mesh.cell_data["id"] == part)
-    triangles = np.array([mesh.get_cell(int(c)).point_ids for c in cells])
+def part_cells(mesh: pv.UnstructuredGrid, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points (k, 3) and triangles (m, 3) of the cells ``cells`` (a mask)."""
+    triangles = np.array([mesh.get_cell(int(c)).point_ids for c in np.flatnonzero(cells)])
     used, inverse = np.unique(triangles, return_inverse=True)
     return mesh.points[used], inverse.reshape(triangles.shape)
 
 
-def test_machine3d_round_trip(run3d: Run3D) -> None:
+def test_hammers3d_and_rotor3d_round_trip(run3d: Run3D) -> None:
+    """Each hammer (cells of its ``id``) and the rotor disc: a closed mesh of its outline's
+    area times its thickness, both caps the 2-D file's polygon, every triangle with the 2-D
+    file's cell data."""
     d = run3d.drawing
     spec = run3d.sim.spec
-    n = len(spec.hammers)
-    thickness = [*d.hammer_thickness, d.rotor_thickness]
-    entries = read_pvd(run3d.directory / "machine3d.pvd")
-    flat = read_pvd(run3d.directory / "machine.pvd")
-    for (_, file), (_, file2d), frame in zip(entries, flat, run3d.frames, strict=True):
-        m, p = both(run3d.directory / file)
-        flat2d = pv.read(run3d.directory / file2d)
-        assert set(p.celltypes) == {pv.CellType.TRIANGLE}
-        assert [c.type for c in m.cells] == ["triangle"]
-        np.testing.assert_array_equal(m.points, p.points)
-        disc = outline_or_circle(None, spec.rotor.radius, ROTOR_SIDES)
-        for k, part in enumerate([*range(n), -1]):
-            points, triangles = part_cells(p, part)
-            mesh = trimesh.Trimesh(points, triangles, process=False)
-            assert mesh.is_watertight and mesh.is_winding_consistent
-            # the pose of machine.pvd: the simulation's for hammers (checked against the file
-            # in test_vtk), the file's polygon for the rotor
-            outline2d = (
-                frame.hammer_vertices[k]
-                if part >= 0
-                else flat2d.points[flat2d.get_cell(k).point_ids, :2]
-            )
-            area = abs(signed_area(outline2d if part >= 0 else disc))
-            assert mesh.volume == pytest.approx(area * thickness[k], rel=VOLUME_RTOL)
-            assert points[:, 2].min() == -0.5 * thickness[k]
-            assert points[:, 2].max() == 0.5 * thickness[k]
-            # posed as in machine.pvd: both caps are the 2-D polygon, vertex for vertex
-            for z in (-0.5 * thickness[k], 0.5 * thickness[k]):
-                cap = points[points[:, 2] == z, :2]
-                assert len(cap) == len(outline2d)
-                gap = np.linalg.norm(cap[:, None, :] - outline2d[None, :, :], axis=2)
-                assert gap.min(axis=1).max() < POSE_ATOL
-                assert gap.min(axis=0).max() < POSE_ATOL
-            # every triangle carries its part's machine.pvd cell data
-            cells = p.cell_data["id"] == part
-            for name in ("swing_angle", "angle", "angular_velocity", "hinge_force"):
-                values = p.cell_data[name][cells]
-                assert np.all(values == flat2d.cell_data[name][k]), name
-                meshio_values = np.concatenate(m.cell_data[name])[cells]
-                np.testing.assert_array_equal(meshio_values, values)
+    disc = outline_or_circle(None, spec.rotor.radius, ROTOR_SIDES)
+    series = [read_pvd(run3d.directory / name) for name in ("hammers3d.pvd", "rotor3d.pvd")]
+    flat = [read_pvd(run3d.directory / name) for name in ("hammers.pvd", "rotor.pvd")]
+    for (_, h3), (_, r3), (_, h2), (_, r2), frame in zip(*series, *flat, run3d.frames, strict=True):
+        for file3d, file2d, hammers in ((h3, h2, True), (r3, r2, False)):
+            m, p = both(run3d.directory / file3d)
+            flat2d = pv.read(run3d.directory / file2d)
+            assert set(p.celltypes) == {pv.CellType.TRIANGLE}
+            assert [c.type for c in m.cells] == ["triangle"]
+            np.testing.assert_array_equal(m.points, p.points)
+            parts = range(len(spec.hammers)) if hammers else [0]
+            for k in parts:
+                cells = p.cell_data["id"] == k if hammers else np.ones(p.n_cells, dtype=bool)
+                thickness = d.hammer_thickness[k] if hammers else d.rotor_thickness
+                points, triangles = part_cells(p, cells)
+                mesh = trimesh.Trimesh(points, triangles, process=False)
+                assert mesh.is_watertight and mesh.is_winding_consistent
+                # the 2-D pose: the simulation's for hammers (checked against the file in
+                # test_vtk), the file's polygon for the rotor
+                outline2d = (
+                    frame.hammer_vertices[k]
+                    if hammers
+                    else flat2d.points[flat2d.get_cell(0).point_ids, :2]
+                )
+                area = abs(signed_area(outline2d if hammers else disc))
+                assert mesh.volume == pytest.approx(area * thickness, rel=VOLUME_RTOL)
+                assert points[:, 2].min() == -0.5 * thickness
+                assert points[:, 2].max() == 0.5 * thickness
+                # posed as in 2-D: both caps are the 2-D polygon, vertex for vertex
+                for z in (-0.5 * thickness, 0.5 * thickness):
+                    cap = points[points[:, 2] == z, :2]
+                    assert len(cap) == len(outline2d)
+                    gap = np.linalg.norm(cap[:, None, :] - outline2d[None, :, :], axis=2)
+                    assert gap.min(axis=1).max() < POSE_ATOL
+                    assert gap.min(axis=0).max() < POSE_ATOL
+                # every triangle carries its part's 2-D cell data
+                assert sorted(p.cell_data.keys()) == sorted(flat2d.cell_data.keys())
+                for name in flat2d.cell_data:
+                    values = p.cell_data[name][cells]
+                    assert np.all(values == flat2d.cell_data[name][k]), name
+                    meshio_values = np.concatenate(m.cell_data[name])[cells]
+                    np.testing.assert_array_equal(meshio_values, values)
     # the rotor turned and the hammers swung: poses are not all the start's
     assert run3d.frames[-1].rotor_angle > 0.1
 
@@ -209,11 +215,12 @@ def test_perga_run_writes_3d_only_when_asked(tmp_path: Path, vtk_3d: bool) -> No
         assert found == []
         assert "thickness" not in granules.point_data
         return
-    machine = read_pvd(vtk / "machine.pvd")
-    assert [t for t, _ in read_pvd(vtk / "machine3d.pvd")] == [t for t, _ in machine]
-    assert [t for t, _ in machine] == pytest.approx([0.0, 0.001, 0.002, 0.003, 0.004])
-    assert found == sorted([*FILES_3D, *(f"machine3d_{k:06d}.vtu" for k in range(len(machine)))])
+    hammers = read_pvd(vtk / "hammers.pvd")
+    assert [t for t, _ in hammers] == pytest.approx([0.0, 0.001, 0.002, 0.003, 0.004])
+    frames = [f"{part}3d_{k:06d}.vtu" for part in ("hammers", "rotor") for k in range(len(hammers))]
+    assert found == sorted([*FILES_3D, *frames])
+    for part in ("hammers3d", "rotor3d"):
+        assert [t for t, _ in read_pvd(vtk / f"{part}.pvd")] == [t for t, _ in hammers]
+        assert ET.parse(vtk / f"{part}.pvd").getroot().get("type") == "Collection"
     assert "thickness" in granules.point_data
-    root = ET.parse(vtk / "machine3d.pvd").getroot()
-    assert root.get("type") == "Collection"
     assert meshio.read(vtk / "chamber3d.vtu").points.shape[1] == 3

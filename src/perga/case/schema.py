@@ -733,10 +733,11 @@ class Output(Strict):
     )
     vtk_3d: bool = Field(
         False,
-        description="with 'vtk': also the 3-D view, RUN/vtk/machine3d.pvd and chamber3d.vtu: "
-        "hammers and rotor disc extruded to their thickness, m (hammers: the plate's or the "
-        "geometry's; rotor: its mesh's height, else the hammers'), centred on the rotor plane "
-        "z = 0, and the chamber wall as tall as the tallest part (see perga.output.vtk3d)",
+        description="with 'vtk': also the 3-D view, RUN/vtk/hammers3d.pvd, rotor3d.pvd and "
+        "chamber3d.vtu: hammers and rotor disc extruded to their thickness, m (hammers: the "
+        "plate's or the geometry's; rotor: its mesh's height, else the hammers'), centred on the "
+        "rotor plane z = 0, and the chamber wall as tall as the tallest part (see "
+        "perga.output.vtk3d)",
     )
 
     @model_validator(mode="after")

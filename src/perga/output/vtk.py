@@ -15,13 +15,15 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   (granule, wall and hammer contacts now: overlap > 0, hammers by the kernel's active flag) and
   ``overlap_max`` (largest of those overlaps, m; 0 without contact). The number of points
   changes from frame to frame when granules are fed or leave.
-* ``machine.pvd`` + ``machine_NNNNNN.vtu``, one per frame: each hammer as a VTK_POLYGON posed at
-  the frame, then the rotor disc (its outline from the rotor's file, or a 64-gon of the rotor
-  radius); cell data ``id`` (hammer index,
-  −1 for the rotor), ``swing_angle`` (α, rad; 0 for the rotor), ``angle`` (absolute orientation:
-  rotor angle + angle on the rotor + α, rad), ``angular_velocity`` (rad/s), ``hinge_force``
-  (magnitude of the hinge reaction over the last Pymunk step, N; 0 for welded and free hammers
-  and the rotor).
+* ``hammers.pvd`` + ``hammers_NNNNNN.vtu``, one per frame: each hammer as a VTK_POLYGON posed
+  at the frame; cell data ``id`` (hammer index), ``swing_angle`` (α, rad), ``angle`` (absolute
+  orientation: rotor angle + angle on the rotor + α, rad), ``angular_velocity`` (rad/s),
+  ``hinge_force`` (magnitude of the hinge reaction over the last Pymunk step, N; 0 for welded
+  and free hammers).
+* ``rotor.pvd`` + ``rotor_NNNNNN.vtu``, one per frame: the rotor disc as a VTK_POLYGON (its
+  outline from the rotor's file, or a 64-gon of the rotor radius) turned to the frame's rotor
+  angle; cell data ``angle`` (rad) and ``angular_velocity`` (rad/s). A series of its own, so
+  that the opaque disc can be shown, hidden or drawn as an outline apart from the hammers.
 * ``chamber.vtu``: the wall's inner outline (from the chamber's file, or its circle as 256
   segments) as one closed VTK_POLY_LINE, written at the first frame (absent without a chamber).
 * ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule (in the order of ids)
@@ -39,8 +41,12 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   arrays).
 
 With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the system) also
-``machine3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in the granule
-frames: see :mod:`perga.output.vtk3d`.
+``hammers3d.pvd``, ``rotor3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in
+the granule frames: see :mod:`perga.output.vtk3d`.
+
+``paraview_state.py`` (:mod:`perga.output.paraview_state`; written at the first frame and
+again at ``close`` with the run's top speed): a ParaView Python state of these files, for File >
+Load State or ``paraview --state=RUN/vtk/paraview_state.py``.
 
 Each ``.pvd`` is extended after every frame by one write of the new entry and the closing tags
 (:class:`PvdSeries`), so a run stopped at any point leaves valid collections of the frames
@@ -62,8 +68,8 @@ from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 from perga.geometry.polygon import outline_or_circle
 from perga.model.frame import Frame, MachineFrame
 from perga.model.records import Events, Impact
-from perga.model.spec import RotorSpec, SceneSpec
-from perga.output import vtk3d, vtk_grid
+from perga.model.spec import SceneSpec
+from perga.output import paraview_state, vtk3d, vtk_grid
 from perga.output.files import reopen_at
 from perga.output.vtk_grid import POLY_LINE, POLYGON
 
@@ -181,9 +187,12 @@ class VtkRecorder:
         self.directory.mkdir(parents=True, exist_ok=True)
         self.spec = spec
         self.granules = PvdSeries(self.directory, "granules")
-        self.machine = PvdSeries(self.directory, "machine")
-        self.machine3d: PvdSeries | None = None
-        self._machine3d: vtk3d.Machine3D | None = None
+        self.hammers = PvdSeries(self.directory, "hammers")
+        self.rotor = PvdSeries(self.directory, "rotor")
+        self.hammers3d: PvdSeries | None = None
+        self.rotor3d: PvdSeries | None = None
+        self._hammers3d: vtk3d.Machine3D | None = None
+        self._rotor3d: vtk3d.Machine3D | None = None
         self.frames = 0
         self.scratch = self.directory / ".trajectories.f8"
         self._scratch: BinaryIO | None = None
@@ -191,10 +200,11 @@ class VtkRecorder:
         self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)  # by id, grows
         self._held = spec.has_bonds
         self._damage = spec.process.damage is not None
-        self._outlines = [np.array(h.outline, dtype=float) for h in spec.hammers]
-        self._outlines.append(_disc(spec.rotor))
+        self._hammer_outlines = [np.array(h.outline, dtype=float) for h in spec.hammers]
+        self._disc = outline_or_circle(spec.rotor.outline, spec.rotor.radius, ROTOR_SIDES)
         self._closed = False
         self._started = False
+        self._speed_max = 0.0
 
     def __getstate__(self) -> dict[str, object]:
         """The recorder as it stands (a checkpoint), with the trajectory scratch file's length
@@ -212,7 +222,7 @@ class VtkRecorder:
             self._scratch = os.fdopen(reopen_at(self.scratch, size), "wb")
 
     def _start(self, frame: Frame) -> None:
-        """Material names and the chamber, at the first frame."""
+        """Material names, the chamber and the ParaView state, at the first frame."""
         spec = self.spec
         self._scratch = open(self.scratch, "wb")  # noqa: SIM115 (closed by close())
         self.granules.comment = "material: " + ", ".join(
@@ -228,14 +238,14 @@ class VtkRecorder:
         self._started = True
 
     def _start_3d(self) -> None:
-        """The extruded parts, the ``machine3d`` series and ``chamber3d.vtu``."""
+        """The extruded parts, the ``hammers3d`` and ``rotor3d`` series and ``chamber3d.vtu``."""
         spec = self.spec
         drawing = spec.drawing
         assert drawing is not None
-        self._machine3d = vtk3d.Machine3D(
-            self._outlines, [*drawing.hammer_thickness, drawing.rotor_thickness]
-        )
-        self.machine3d = PvdSeries(self.directory, "machine3d")
+        self._hammers3d = vtk3d.Machine3D(self._hammer_outlines, drawing.hammer_thickness)
+        self._rotor3d = vtk3d.Machine3D([self._disc], [drawing.rotor_thickness])
+        self.hammers3d = PvdSeries(self.directory, "hammers3d")
+        self.rotor3d = PvdSeries(self.directory, "rotor3d")
         if spec.chamber is not None:
             c = spec.chamber
             inner = outline_or_circle(c.outline, c.radius, CHAMBER_SEGMENTS)
@@ -243,12 +253,13 @@ class VtkRecorder:
             vtk_grid.save(vtk3d.part_grid(part), self.directory / "chamber3d.vtu")
 
     def record(self, frame: Frame, events: Events) -> None:
-        """Write the granule and machine frames of ``frame`` and update both ``.pvd``."""
+        """Write the granule, hammer and rotor frames of ``frame`` and update the ``.pvd``."""
         if not self._started:
             self._start(frame)
         g, t = frame.granules, frame.time
         p, v, w = g.positions, g.velocities, g.angular_velocities
         speed = np.hypot(v[:, 0], v[:, 1])
+        self._speed_max = max(self._speed_max, float(speed.max(initial=0.0)))
         new = events.impacts[len(self._impacts) :]
         self._impacts += new
         self._count([i.granule for i in new], int(g.ids.max(initial=-1)) + 1)
@@ -274,16 +285,26 @@ class VtkRecorder:
             data["thickness"] = np.full(len(p), drawing.granule_thickness)
         mesh = vtk_grid.vertices(p, data)
         self.granules.add(t, mesh)
-        cell_data = machine_cell_data(self.spec, frame.machine)
-        origins, angles = _poses(frame.machine)
-        self.machine.add(t, machine_mesh(self._outlines, origins, angles, cell_data))
-        if self.machine3d is not None and self._machine3d is not None:
-            self.machine3d.add(t, self._machine3d.mesh(origins, angles, cell_data))
+        m = frame.machine
+        hammers, rotor = hammer_cell_data(self.spec, m), rotor_cell_data(m)
+        at_axis, rotor_angle = np.zeros((1, 2)), np.array([m.rotor_angle])
+        self.hammers.add(t, machine_mesh(self._hammer_outlines, m.hinges, m.axis_angles, hammers))
+        self.rotor.add(t, machine_mesh([self._disc], at_axis, rotor_angle, rotor))
+        if self._hammers3d is not None and self._rotor3d is not None:
+            assert self.hammers3d is not None and self.rotor3d is not None
+            self.hammers3d.add(t, self._hammers3d.mesh(m.hinges, m.axis_angles, hammers))
+            self.rotor3d.add(t, self._rotor3d.mesh(at_axis, rotor_angle, rotor))
         rows = np.column_stack((np.full(len(p), t), g.ids, p, speed))
         assert self._scratch is not None
         self._scratch.write(rows.tobytes())
         self._scratch.flush()
+        if self.frames == 0:
+            self._write_state()
         self.frames += 1
+
+    def _write_state(self) -> None:
+        """``paraview_state.py`` for the frames so far."""
+        paraview_state.write(self.directory, self._speed_max, self.spec.chamber is not None)
 
     def _count(self, granules: list[int], ids: int) -> None:
         """Add impacts of ``granules`` (ids) to the counts, which cover ids below ``ids``."""
@@ -299,9 +320,10 @@ class VtkRecorder:
         if self._closed or not self._started:
             return
         self._closed = True
-        for series in (self.granules, self.machine, self.machine3d):
+        for series in (self.granules, self.hammers, self.rotor, self.hammers3d, self.rotor3d):
             if series is not None:
                 series.close()
+        self._write_state()
         try:
             self._write_trajectories()
         finally:
@@ -358,28 +380,24 @@ class VtkRecorder:
         vtk_grid.save(vtk_grid.vertices(points, columns), self.directory / "impacts.vtu")
 
 
-def _disc(rotor: RotorSpec) -> FloatArray:
-    """The rotor disc's outline in the rotor's frame, m (a ``ROTOR_SIDES``-gon without one)."""
-    return outline_or_circle(rotor.outline, rotor.radius, ROTOR_SIDES)
-
-
-def _poses(machine: MachineFrame) -> tuple[FloatArray, FloatArray]:
-    """Where each part's frame is (m) and how it is turned (rad): the hammers, then the rotor."""
-    origins = np.vstack((machine.hinges, np.zeros((1, 2))))
-    return origins, np.append(machine.axis_angles, machine.rotor_angle)
-
-
-def machine_cell_data(spec: SceneSpec, machine: MachineFrame) -> dict[str, NDArray]:
-    """Per part, the hammers then the rotor: the cell data listed in the module doc."""
+def hammer_cell_data(spec: SceneSpec, machine: MachineFrame) -> dict[str, NDArray]:
+    """Per hammer, the cell data of ``hammers.pvd`` (module doc)."""
     alpha = np.asarray(machine.swing_angles)
     mounts = np.array([h.angle_on_rotor for h in spec.hammers], dtype=float)
-    theta = machine.rotor_angle
     return {
-        "id": np.append(np.arange(len(alpha), dtype=np.int64), -1),
-        "swing_angle": np.append(alpha, 0.0),
-        "angle": np.append(theta + mounts + alpha, theta),
-        "angular_velocity": np.append(machine.angular_velocities, machine.rotor_angular_velocity),
-        "hinge_force": np.append(machine.hinge_forces, 0.0),
+        "id": np.arange(len(alpha), dtype=np.int64),
+        "swing_angle": alpha,
+        "angle": machine.rotor_angle + mounts + alpha,
+        "angular_velocity": np.asarray(machine.angular_velocities, dtype=float),
+        "hinge_force": np.asarray(machine.hinge_forces, dtype=float),
+    }
+
+
+def rotor_cell_data(machine: MachineFrame) -> dict[str, NDArray]:
+    """The cell data of ``rotor.pvd`` (module doc)."""
+    return {
+        "angle": np.array([machine.rotor_angle]),
+        "angular_velocity": np.array([machine.rotor_angular_velocity]),
     }
 
 

@@ -5,12 +5,12 @@ the recorders see the system and its frames only, so the case's sizes travel in 
 
 Files in ``RUN/vtk/`` (SI units), beside the 2-D ones of :mod:`perga.output.vtk`:
 
-* ``machine3d.pvd`` + ``machine3d_NNNNNN.vtu``, one per frame, the times of ``machine.pvd``:
-  each hammer, then the rotor disc, as the closed mesh of its outline extruded
-  (:func:`perga.geometry.extrude.extrude`) to its thickness, from z = −t/2 to +t/2 (centred on
-  the rotor plane z = 0), posed as in ``machine.pvd``; VTK_TRIANGLE cells, outward normals;
-  the cell data of ``machine.pvd`` (``id``, ``swing_angle``, ``angle``, ``angular_velocity``,
-  ``hinge_force``) on every triangle of its part. The rotor's hinge holes are not drawn (the
+* ``hammers3d.pvd`` + ``hammers3d_NNNNNN.vtu`` and ``rotor3d.pvd`` + ``rotor3d_NNNNNN.vtu``,
+  one per frame at the times of ``hammers.pvd``: each hammer, and the rotor disc, as the closed
+  mesh of its outline extruded (:func:`perga.geometry.extrude.extrude`) to its thickness, from
+  z = −t/2 to +t/2 (centred on the rotor plane z = 0), posed as in ``hammers.pvd`` and
+  ``rotor.pvd``; VTK_TRIANGLE cells, outward normals; the cell data of the 2-D file on every
+  triangle of its part. The rotor's hinge holes are not drawn (the
   spec carries the disc's outline only; the hammers cover them).
 * ``chamber3d.vtu`` (first frame): the wall between its inner outline (as ``chamber.vtu``)
   and that outline offset outwards by the wall thickness along the mitre lines
@@ -20,7 +20,7 @@ Files in ``RUN/vtk/`` (SI units), beside the 2-D ones of :mod:`perga.output.vtk`
   of their radius and thickness, which costs no written geometry per frame.
 
 A part's mesh is extruded once, in its body's frame; a frame only rotates and translates its
-vertices (numpy), so the series costs about as much as ``machine.pvd``.
+vertices (numpy), so the series cost about as much as the 2-D ones.
 """
 
 from __future__ import annotations
@@ -70,8 +70,8 @@ def _triangles(
 
 
 class Machine3D:
-    """The hammers and the rotor disc extruded once (``outlines`` in their own frames, m;
-    ``thicknesses``, m); :meth:`mesh` poses them."""
+    """Parts of the machine (the hammers, or the rotor disc) extruded once (``outlines`` in their
+    own frames, m; ``thicknesses``, m); :meth:`mesh` poses them."""
 
     def __init__(self, outlines: Sequence[ArrayLike], thicknesses: Sequence[float]) -> None:
         parts = [extruded(o, t) for o, t in zip(outlines, thicknesses, strict=True)]
@@ -88,7 +88,7 @@ class Machine3D:
         self, origins: FloatArray, angles: FloatArray, cell_data: dict[str, NDArray]
     ) -> vtkUnstructuredGrid:
         """The parts with their frames at ``origins`` (m) turned by ``angles`` (rad);
-        ``cell_data`` holds one value per part (hammers, then rotor)."""
+        ``cell_data`` holds one value per part."""
         angle = np.asarray(angles)[self.vertex_part]
         origin = np.asarray(origins)
         c, s = np.cos(angle), np.sin(angle)

@@ -111,7 +111,7 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
     files = sorted(p.name for p in directory.iterdir() if p.is_file() or p.name == "vtk")
     lines += ["", "## Files", "", ", ".join(f"`{f}`" for f in files)]
     if (directory / "vtk" / "granules.pvd").exists():
-        lines += ["", "ParaView: open `vtk/granules.pvd` and `vtk/machine.pvd`."]
+        lines += ["", "ParaView: `paraview --state=vtk/paraview_state.py` (or File > Load State)."]
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
