@@ -40,12 +40,19 @@ def ring(count: int, radius: float, phase: float) -> FloatArray:
     return radius * np.column_stack((np.cos(angles), np.sin(angles)))
 
 
+CANDIDATE_BATCH = 256
+"""Candidate centres drawn, and checked against the obstacles, at a time."""
+
+
 def random_pack(
     radii: FloatArray, inner: float, outer: float, seed: int, obstacles: Obstacles | None = None
 ) -> FloatArray:
     """Non-overlapping discs of ``radii`` (m) with centres uniform in the annulus
     inner ≤ r ≤ outer (m), clear of the ``obstacles`` (hammers, the chamber), by random
-    sequential addition with a cell grid (cells of twice the largest radius).
+    sequential addition with a cell grid (cells of twice the largest radius). Candidates are
+    drawn ``CANDIDATE_BATCH`` at a time, the numbers of ``sqrt(rng.uniform(inner², outer²))``
+    and ``rng.uniform(0, 2π)`` in turn, bit for bit, and checked against the obstacles in one
+    call per batch (again for the rest of it when the granule's radius changes).
 
     Deterministic for a given seed. Raises :class:`PlacementError` when it cannot place them all.
     """
@@ -54,32 +61,41 @@ def random_pack(
     cell = 2 * float(np.max(radii)) if count else 1.0
     grid: dict[tuple[int, int], list[int]] = {}
     placed = np.empty((count, 2))
+    lo, span = inner**2, outer**2 - inner**2
     n, attempts = 0, 0
     while n < count:
-        attempts += 1
-        if attempts > MAX_ATTEMPTS_PER_GRANULE * count:
-            raise PlacementError(
-                f"random placement fitted only {n} of {count} granules (radii up to "
-                f"{cell / 2:g} m) in the annulus [{inner:g}, {outer:g}] m clear of the hammers "
-                "and the wall: use fewer granules or a wider annulus"
-            )
-        r = math.sqrt(rng.uniform(inner**2, outer**2))
-        theta = rng.uniform(0, 2 * math.pi)
-        x, y = r * math.cos(theta), r * math.sin(theta)
-        ci, cj = math.floor(x / cell), math.floor(y / cell)
-        rn = radii[n]
-        if any(
-            (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < (rn + radii[k]) ** 2
-            for di in (-1, 0, 1)
-            for dj in (-1, 0, 1)
-            for k in grid.get((ci + di, cj + dj), ())
-        ):
-            continue
-        if obstacles is not None and not obstacles.clear([(x, y)], [rn])[0]:
-            continue
-        placed[n] = x, y
-        grid.setdefault((ci, cj), []).append(n)
-        n += 1
+        u = rng.random(2 * CANDIDATE_BATCH)
+        distance, theta = np.sqrt(lo + span * u[0::2]), 2 * math.pi * u[1::2]
+        points = [(d * math.cos(t), d * math.sin(t)) for d, t in zip(distance, theta, strict=True)]
+        clear_for, clear = math.nan, np.ones(CANDIDATE_BATCH, dtype=bool)
+        for j, (x, y) in enumerate(points):
+            if n == count:
+                break
+            attempts += 1
+            if attempts > MAX_ATTEMPTS_PER_GRANULE * count:
+                raise PlacementError(
+                    f"random placement fitted only {n} of {count} granules (radii up to "
+                    f"{cell / 2:g} m) in the annulus [{inner:g}, {outer:g}] m clear of the "
+                    "hammers and the wall: use fewer granules or a wider annulus"
+                )
+            ci, cj = math.floor(x / cell), math.floor(y / cell)
+            rn = radii[n]
+            if any(
+                (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < (rn + radii[k]) ** 2
+                for di in (-1, 0, 1)
+                for dj in (-1, 0, 1)
+                for k in grid.get((ci + di, cj + dj), ())
+            ):
+                continue
+            if obstacles is not None:
+                if rn != clear_for:
+                    clear_for = rn
+                    clear[j:] = obstacles.clear(points[j:], np.full(len(points) - j, rn))
+                if not clear[j]:
+                    continue
+            placed[n] = x, y
+            grid.setdefault((ci, cj), []).append(n)
+            n += 1
     return placed
 
 
