@@ -87,8 +87,8 @@ def references(tmp_path_factory) -> dict[str, Path]:
     [
         ("rigid", signal.SIGKILL, 1),
         ("soft", signal.SIGKILL, 2),
-        ("rigid", signal.SIGTERM, 3),
-        ("soft", signal.SIGINT, 4),
+        pytest.param("rigid", signal.SIGTERM, 3, marks=pytest.mark.slow),
+        pytest.param("soft", signal.SIGINT, 4, marks=pytest.mark.slow),
         ("parquet", signal.SIGTERM, 5),
     ],
 )
@@ -96,7 +96,9 @@ def test_a_run_stopped_at_a_random_moment_resumes_to_the_same_bytes(
     references, tmp_path, engine, signum, seed
 ):
     """The signal comes at a seeded moment after the first checkpoint can have been written;
-    the resumed run's tables and ParaView frames equal the reference byte for byte."""
+    the resumed run's tables and ParaView frames equal the reference byte for byte. SIGTERM to
+    a rigid run and SIGINT to a soft one are in the slow suite (tests/test_faults.py stops
+    runs with both in the default one)."""
     case, sets = CASES[engine]
     out = tmp_path / "run"
     proc = start(case, out, sets)
