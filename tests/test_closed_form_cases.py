@@ -26,7 +26,7 @@ from perga.analytic.impact import (
     oblique_impact,
 )
 from perga.analytic.sliding import BladeSlide, frictionless_exit
-from perga.case import Case, load_case
+from perga.case import Case, CaseError, load_case
 from perga.engine import Simulation
 from perga.model.from_case import scene_spec
 
@@ -88,11 +88,12 @@ def _rotor_frame(sim: Simulation, omega: float) -> tuple[float, float, float]:
     return float(p @ ex), float(v_rel @ ex), float(p @ ey)
 
 
-def _blade_exit(case: Case) -> tuple[float, float, float, Simulation]:
-    """Exit time (s) and relative exit speed (m/s) at the tip, interpolated linearly between
-    the two steps around it, the largest drift of the granule's centre off its line (m), and
-    the simulation stopped at the first step past the tip."""
-    omega, tip = case.rotor.angular_velocity, _blade_tip(case)
+def _blade_exit(case: Case, tip: float | None = None) -> tuple[float, float, float, Simulation]:
+    """Exit time (s) and relative exit speed (m/s) at the tip (default the plate's end, m),
+    interpolated linearly between the two steps around it, the largest drift of the granule's
+    centre off its line (m), and the simulation stopped at the first step past the tip."""
+    omega = case.rotor.angular_velocity
+    tip = _blade_tip(case) if tip is None else tip
     sim = _simulation(case, record_impacts=False, track_energy=False)
     previous = (sim.time, *_rotor_frame(sim, omega))
     line, drift = previous[3], 0.0
@@ -131,9 +132,6 @@ def test_blade_with_face_friction() -> None:
     f = case.granule_hammer_contact.friction
     assert f > 0 and not case.granules.rolls
     omega, x0, v0, h = _blade_start(case)
-    # the granule's spin is 0 in the fixed frame (a case cannot set it), -omega relative to
-    # the face: its contact point slips at x' - omega r, which must keep the sign of x'
-    assert v0 > omega * case.granules.radius
     slide = BladeSlide(omega, face_friction=f, offset=h)
     assert slide.normal_per_mass(x0, v0) > 0
     exact = slide.closed_form(x0, v0)
@@ -141,6 +139,36 @@ def test_blade_with_face_friction() -> None:
     t, v, drift, _ = _blade_exit(case)
     assert t == pytest.approx(t_exact, rel=REQUIRED)
     assert v == pytest.approx(float(exact.velocity(t_exact)), rel=REQUIRED)
+    assert drift < 0.05 * case.granules.radius
+
+
+def test_sliding_point_from_rest_with_face_friction() -> None:
+    """A sliding point at rest on a leading face whose granule line passes through the axis
+    (h = 0): x'' + 2 f omega x' - omega^2 x = 0 from x' = 0 (BladeSlide), x' at 2 ms and the exit
+    time and speed to 1e-3 (measured 1.1e-4, 1.5e-4, 8.6e-5). Friction opposes x' from the
+    start: taken at the granule's surface the contact slipped at x' - omega r, friction pushed
+    the granule outwards while x' < omega r = 0.2 m/s, and x' at 2 ms was 4.4e-3 fast."""
+    case = load_case(CASES / "blade-face-friction-from-rest.toml")
+    f = case.granule_hammer_contact.friction
+    assert f > 0 and not case.granules.rolls
+    omega = case.rotor.angular_velocity
+    (p,), (v,) = case.granules.placement.positions, case.granules.placement.velocities
+    assert p[1] == 0.0  # on the line through the axis: the face is 2 mm behind it
+    np.testing.assert_array_equal(np.array(v) - _z_cross(omega, p), [0.0, 0.0])  # at rest
+    tip = 0.15  # the blade's end in blade-behind-axis.txt
+    slide = BladeSlide(omega, face_friction=f, offset=0.0, tip=tip)
+    # from rest ω²x0 drives it outwards: that branch, chosen by an infinitesimal v0 as
+    # BladeSlide.integrate chooses it; solve_ivp (DOP853, rtol 1e-10) agrees to 1e-8
+    exact = slide.closed_form(p[0], 1e-300)
+    t_exact = exact.time_to_reach(tip)
+    ivp = slide.integrate(p[0], 0.0, 1.0)
+    assert ivp.event == "tip" and ivp.t[-1] == pytest.approx(t_exact, rel=1e-8)
+    early = _simulation(case, record_impacts=False, track_energy=False)
+    early.run(0.002)
+    assert _rotor_frame(early, omega)[1] == pytest.approx(exact.velocity(0.002), rel=REQUIRED)
+    t, v_exit, drift, _ = _blade_exit(case, tip)
+    assert t == pytest.approx(t_exact, rel=REQUIRED)
+    assert v_exit == pytest.approx(float(exact.velocity(t_exact)), rel=REQUIRED)
     assert drift < 0.05 * case.granules.radius
 
 
@@ -369,3 +397,58 @@ def test_hinged_hammer_swing_frequency() -> None:
     assert alpha.max() == pytest.approx(amplitude, rel=REQUIRED)
     # the granule on the axis is never touched
     np.testing.assert_array_equal(sim.granule_velocities(), [[0.0, 0.0]])
+
+
+def test_successive_bounces_on_the_floor() -> None:
+    """A granule dropped from rest bounces on the round chamber's floor: heights after bounces
+    1-6 are h0·e^(2n). Semi-implicit Euler steps a free flight exactly along the parabola of
+    energy g·(h0 + g·dt²/8) (perga.contact.rigid.wall_bounce), which each bounce scales by e²;
+    the highest sampled position falls short of that parabola's top by at most g·dt²/2
+    (4.9e-8 m: 3e-6 of the sixth height). Tolerance: that interval, with 1e-12 m of round-off.
+    Measured before the wall-bounce fix: +0.39, +1.0, +0.84, −0.41, +1.2 % (the round wall's
+    corner under the axis turned the granule aside) and on a flat floor +0.017 to +0.16 %."""
+    case = load_case(CASES / "bouncing-granule.toml")
+    sim = _simulation(case)
+    r = case.granules.radius
+    touch = -case.chamber.radius + r  # the lowest edge's middle, under the axis (circumscribed)
+    x0, y0 = case.granules.placement.positions[0]
+    assert x0 == 0.0
+    g, dt, e = float(np.hypot(*sim.spec.gravity)), case.solver.dt, case.contacts[0].restitution
+    ys, vs = [], []
+    while sim.time < case.solver.duration:
+        sim.step()
+        ys.append(sim.granule_positions()[0][1])
+        vs.append(sim.granule_velocities()[0][1])
+    apexes = [ys[i] - touch for i in range(1, len(vs)) if vs[i - 1] > 0 >= vs[i]]
+    assert len(apexes) >= 6
+    top = y0 - touch + g * dt**2 / 8
+    for n, height in enumerate(apexes[:6], start=1):
+        exact = top * e ** (2 * n)
+        assert exact - g * dt**2 / 2 - 1e-12 <= height <= exact + 1e-12, (n, height, exact)
+    assert abs(sim.granule_positions()[0][0]) < 1e-12  # straight up and down: a flat edge
+
+
+@pytest.mark.parametrize("wall", ["steel", "beebread"])
+def test_a_soft_granule_rests_on_a_drawn_floor_at_its_static_overlap(wall: str) -> None:
+    """Hertz: the floor carries m·g at the overlap δ = (m·g / ((4/3)E*·√r))^(2/3) (a flat wall:
+    R* = r, whatever its material; E* from both materials' E and ν). Started there, at rest, 150
+    mm from under the axis on a drawn box's floor: taken when the stated overlap is 1.01 δ,
+    refused at 0.99 δ; after 0.05 s still at δ to 1e-6 (measured 3e-12: the equilibrium is
+    exact up to round-off; with a wall of the granules' own material the old R* = r/2 gave
+    2^(1/3) δ, +26 %)."""
+    case = load_case(CASES / "resting-granule.toml")
+    r, m = case.granules.radius, case.granules.mass
+    g = float(np.hypot(*scene_spec(case).gravity))
+    granule, floor = case.materials[case.granules.material], case.materials[wall]
+    inverse = sum((1 - p.poisson_ratio**2) / p.youngs_modulus for p in (granule, floor))
+    delta = (m * g / (4 / 3 / inverse * math.sqrt(r))) ** (2 / 3)
+    path = CASES / "resting-granule.toml"
+    y = -0.2 + r - delta
+    start = [f'chamber.material="{wall}"', f"granules.placement.positions=[[0.15, {y}]]"]
+    with pytest.raises(CaseError, match="overlaps the wall"):
+        load_case(path, overrides=[*start, f"granules.placement.overlap={0.99 * delta}"])
+    case = load_case(path, overrides=[*start, f"granules.placement.overlap={1.01 * delta}"])
+    sim = _simulation(case)
+    sim.run(0.05)
+    overlap = r - (sim.granule_positions()[0][1] + 0.2)
+    assert overlap == pytest.approx(delta, rel=1e-6)

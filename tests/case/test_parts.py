@@ -33,9 +33,16 @@ RADIUS, MASS = 2.5e-3, 1.6e-4  # a 0.16 g granule, m and kg
 
 def test_round_wall_is_the_circumscribed_quadrilaterals():
     """N = 96, R = 0.15 m, t = 0.01 m: each piece has inner corners on the circle of
-    R/cos(π/N) and outer ones on (R + t)/cos(π/N), at the angles 2πi/N (to round-off)."""
+    R/cos(π/N) and outer ones on (R + t)/cos(π/N), at the angles (2i + 1)π/N (to round-off),
+    so that the lowest edge is flat at y = −R, centred under the axis."""
     n, r, t = 96, 0.15, 0.01
-    pieces, outer = wall_pieces(circumscribed(r, n), t)
+    inner = circumscribed(r, n)
+    angles = np.arctan2(inner[:, 1], inner[:, 0]) % (2 * math.pi)
+    np.testing.assert_allclose(angles, (2 * np.arange(n) + 1) * math.pi / n, rtol=0, atol=1e-12)
+    lowest = inner[np.argsort(inner[:, 1])[:2]]
+    np.testing.assert_allclose(lowest[:, 1], -r, rtol=1e-12)
+    np.testing.assert_allclose(lowest[:, 0].sum(), 0.0, atol=1e-15)
+    pieces, outer = wall_pieces(inner, t)
     assert len(pieces) == n
     stretch = 1 / math.cos(math.pi / n)
     radii = sorted({round(float(np.hypot(*v)), 12) for p in pieces for v in p})

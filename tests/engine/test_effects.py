@@ -237,7 +237,7 @@ def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:
     (exact: one impulse on a static wall, aimed at a face's tangent point), and a
     hinged hammer reaching past the wall's radius moves exactly as on an open rotor."""
     wall = ChamberSpec(radius=0.15, wall_thickness=0.02, material="wall", segments=96)
-    c, s = math.cos(math.pi / 96), math.sin(math.pi / 96)  # a face's tangent point
+    c, s = math.cos(2 * math.pi / 96), math.sin(2 * math.pi / 96)  # a face middle (2πi/96)
     granule = GranuleSpec(position=(0.14 * c, 0.14 * s), velocity=(5.0 * c, 5.0 * s),
                           radius=0.002, mass=50e-6, material="bb")  # fmt: skip
     hammer = plate(0.0, 0.1, -0.01, 0.01, 0.05, hinge_radius=0.1, angle_on_rotor=2.0,

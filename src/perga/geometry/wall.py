@@ -31,8 +31,11 @@ from perga.geometry.units import GeometryError
 
 def circumscribed(radius: float, sides: int) -> FloatArray:
     """The regular ``sides``-gon whose edges touch the circle of ``radius`` (counter-clockwise,
-    a vertex on +x), m: at most radius·(1/cos(π/sides) − 1) outside the circle."""
-    angles = 2 * math.pi * np.arange(sides) / sides
+    vertices at the angles (2i + 1)π/sides), m: at most radius·(1/cos(π/sides) − 1) outside the
+    circle. With ``sides`` a multiple of 4 an edge's middle, not a corner, lies on each axis,
+    −y included: a granule dropped under the axis of a vertical rotor lands on a flat edge, as
+    on the circle's lowest point (a corner there turned it aside by up to 2π/sides)."""
+    angles = (2 * np.arange(sides) + 1) * math.pi / sides
     return radius / math.cos(math.pi / sides) * np.c_[np.cos(angles), np.sin(angles)]
 
 

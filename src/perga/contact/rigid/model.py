@@ -4,8 +4,11 @@ and friction exact per impact (:class:`RigidContacts`).
 The granules move in the machine's own ``space.step`` (drift, collision detection, impulses:
 :mod:`perga.engine.simulation`); the model adds them, the chamber wall and the collision
 handlers to the machine's space (:mod:`~perga.contact.rigid.bodies`), replaces the contacts of
-hammers of several pieces by their outline's (:mod:`~perga.contact.rigid.outline`), records the
-impacts (:mod:`~perga.contact.rigid.impacts`) and measures what the contacts dissipate
+hammers of several pieces by their outline's (:mod:`~perga.contact.rigid.outline`), keeps
+granule-wall bounces under gravity to the impulse law (:mod:`~perga.contact.rigid.wall_bounce`),
+moves the contacts of granules that do not roll onto their centres
+(:mod:`~perga.contact.rigid.sliding_point`), records the impacts
+(:mod:`~perga.contact.rigid.impacts`) and measures what the contacts dissipate
 (:mod:`~perga.contact.rigid.dissipation`).
 
 A held granule (a comb's cell: ``GranuleSpec.bond_force``) moves freely within a machine step,
@@ -26,10 +29,12 @@ import numpy as np
 import pymunk
 
 from perga.contact.protocol import FloatArray, GranuleState
+from perga.contact.rigid import sliding_point
 from perga.contact.rigid.bodies import attach_bodies
 from perga.contact.rigid.dissipation import ArbiterMeter
 from perga.contact.rigid.impacts import ImpactRecorder
 from perga.contact.rigid.outline import OutlineFilter
+from perga.contact.rigid.wall_bounce import wall_bounce
 from perga.engine import units as u
 from perga.engine.batch import BodyReader, BodyWriter
 from perga.engine.machine import Machine, MachineState
@@ -77,6 +82,12 @@ class RigidContacts:
         outline = OutlineFilter(machine)  # hammers of several pieces: their outline's contacts
         if outline:
             self.bodies.listen("pre_solve", outline.pre_solve, ("granule", "hammer"))
+        if any(spec.gravity):  # after the pair setters, which set the pair's restitution
+            self.bodies.listen("pre_solve", wall_bounce, ("granule", "wall"))
+        feed = spec.process.feed
+        if not all(g.rolls for g in spec.granules) or (feed is not None and not feed.rolls):
+            self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
+            self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
         self.recorder = (
             ImpactRecorder(self.bodies, filtered=bool(outline)) if record_impacts else None
         )
