@@ -95,6 +95,28 @@ def test_paper_loss_per_impact_is_one_minus_e_squared():
     assert ROWS["loss-per-impact"].fitted.numbers["normal"] == pytest.approx(1 - 0.7**2, rel=1e-12)
 
 
+def test_the_45_degree_loss_names_its_granule():
+    """At 45° (|v| = 1) a point mass sliding throughout keeps e·v_n normally and
+    v_t − f(1 + e)|v_n| tangentially: it loses 1 − (e² + (1 − f(1 + e))²)/2 of its energy. A
+    disc's friction also spins it up, so its slip stops and it loses less; the row gives both."""
+    row = ROWS["loss-per-impact"].fitted
+    e, f = FIT.e, FIT.f
+    assert f * (1 + e) < 1  # the point mass slides throughout
+    assert row.numbers["oblique_45"] == pytest.approx(1 - (e**2 + (1 - f * (1 + e)) ** 2) / 2)
+    assert row.numbers["oblique_45_disc"] < row.numbers["oblique_45"]
+    assert "(point mass)" in row.value and "(disc, sticking)" in row.value
+
+
+def test_a_claim_the_fit_was_made_for_says_so():
+    """The fitted ω puts decay-0.02s on its bound (margin ~1e-13): the row shows the margin and
+    says the fit makes the claim hold; a claim with room does not say it."""
+    fitted = ROWS["decay-0.02s"].fitted
+    assert abs(fitted.numbers["margin"]) < 1e-9
+    assert "holds by construction" in fitted.value
+    for row in (ROWS["decay-0.02s"].realistic, ROWS["decay-0.05s"].fitted):
+        assert row.numbers["margin"] > 0.1 and "by construction" not in row.value
+
+
 def test_successive_fit_and_energy():
     numbers = ROWS["successive-radii"].fitted.numbers
     assert numbers["max_relative_error"] < 0.1
