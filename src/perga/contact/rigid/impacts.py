@@ -2,12 +2,12 @@
 rows.
 
 An impact is the first step of a granule-hammer contact. Chipmunk moves the bodies, then finds
-contacts: a new contact's ``begin`` (or its first processed ``pre_solve`` where contacts are
-filtered) stores the relative contact velocity, the granule's kinetic energy and velocity and
-the hammer's state, read after the step's position update and before its impulses; its first
-``post_solve`` completes the row with the velocities after the impulses, the impulse and the
-energy dissipated in the contact, −J·v̄_rel with v̄_rel the mean of the relative contact velocity
-before and after (exact for one impulse).
+contacts: a new contact's ``begin`` (or, where ``pre_solve`` rewrites contacts, its first
+processed ``pre_solve``, after the rewrite) stores the relative contact velocity, the granule's
+kinetic energy and velocity and the hammer's state, read after the step's position update and
+before its impulses; its first ``post_solve`` completes the row with the velocities after the
+impulses, the impulse and the energy dissipated in the contact, −J·v̄_rel with v̄_rel the mean
+of the relative contact velocity before and after (exact for one impulse).
 """
 
 from __future__ import annotations
@@ -48,12 +48,14 @@ class ImpactRecorder:
 
     A granule touching two convex pieces of one hammer in the same step (a notch) makes two
     Chipmunk contacts but one impact: their impulses along the first contact's normal and their
-    dissipation are summed into the first one's row. With ``filtered`` (hammers of several
-    pieces: :mod:`~perga.contact.rigid.outline` drops contacts in ``pre_solve``) an impact
-    starts at a contact's first step that is processed, not at its ``begin``.
+    dissipation are summed into the first one's row. With ``rewritten`` (contacts that
+    ``pre_solve`` replaces or drops: hammers of several pieces, :mod:`~perga.contact.rigid.
+    outline`; sliding points, :mod:`~perga.contact.rigid.sliding_point`) an impact starts at a
+    contact's first processed ``pre_solve``, after those listeners, so that its velocities
+    before and after are taken at the same points.
     """
 
-    def __init__(self, bodies: RigidBodies, *, filtered: bool = False) -> None:
+    def __init__(self, bodies: RigidBodies, *, rewritten: bool = False) -> None:
         self.impacts: list[Impact] = []
         self.time = 0.0
         self._machine = bodies.machine
@@ -63,7 +65,7 @@ class ImpactRecorder:
         self._pending: dict[tuple[pymunk.Shape, pymunk.Shape], _Pending | None] = {}
         self._rows: dict[tuple[int, int], int] = {}
         self._rows_time = -1.0
-        start = "pre_solve" if filtered else "begin"
+        start = "pre_solve" if rewritten else "begin"
         bodies.listen(start, self._start, ("granule", "hammer"))
         bodies.listen("post_solve", self._post_solve, ("granule", "hammer"))
         bodies.listen("separate", self._separate, ("granule", "hammer"))

@@ -85,11 +85,14 @@ class RigidContacts:
         if any(spec.gravity):  # after the pair setters, which set the pair's restitution
             self.bodies.listen("pre_solve", wall_bounce, ("granule", "wall"))
         feed = spec.process.feed
-        if not all(g.rolls for g in spec.granules) or (feed is not None and not feed.rolls):
+        sliding = not all(g.rolls for g in spec.granules) or (feed is not None and not feed.rolls)
+        if sliding:
             self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
             self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
         self.recorder = (
-            ImpactRecorder(self.bodies, filtered=bool(outline)) if record_impacts else None
+            ImpactRecorder(self.bodies, rewritten=bool(outline) or sliding)
+            if record_impacts
+            else None
         )
         self.arbiters = ArbiterMeter(machine) if track_energy else None
         self.releases: list[Release] = []
