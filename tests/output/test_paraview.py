@@ -46,10 +46,10 @@ def run(tmp_path_factory):
     return run
 
 
-def gui(*options: str) -> subprocess.CompletedProcess:
-    """The ParaView GUI under xvfb with ``options`` (user settings ignored, ``--dr``)."""
+def under_xvfb(*command: str) -> subprocess.CompletedProcess:
+    """``command`` on a virtual display; the completed process (its return code checked)."""
     result = subprocess.run(
-        ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "paraview", "--dr", *options],
+        ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", *command],
         capture_output=True,
         text=True,
         timeout=300,
@@ -57,6 +57,11 @@ def gui(*options: str) -> subprocess.CompletedProcess:
     )
     assert result.returncode == 0, result.stderr[-2000:]
     return result
+
+
+def gui(*options: str) -> subprocess.CompletedProcess:
+    """The ParaView GUI with ``options`` (user settings ignored, ``--dr``)."""
+    return under_xvfb("paraview", "--dr", *options)
 
 
 def coloured_pixels(png: Path, margin: int = 0) -> int:
@@ -98,15 +103,7 @@ def test_the_state_written_with_the_run_opens_in_the_paraview_gui(run, tmp_path)
 
 def pvbatch(run, *options):
     """Run the script on ``run``; the completed process (its return code checked)."""
-    result = subprocess.run(
-        ["xvfb-run", "-a", "pvbatch", str(SCRIPT), str(run), *options],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-    )
-    assert result.returncode == 0, result.stderr[-2000:]
-    return result
+    return under_xvfb("pvbatch", str(SCRIPT), str(run), *options)
 
 
 def test_pvbatch_reads_the_series_and_renders_the_granules(run, tmp_path):
