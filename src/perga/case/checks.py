@@ -287,7 +287,13 @@ def _effects(case: Case) -> list[str]:
 def _contact_model(case: Case) -> list[str]:
     cm = case.contact_model
     if not cm.soft:
-        return []
+        return [
+            f"contacts[{i}].{key}: sets a soft contact's stiffness; rigid contacts have none "
+            "(contact_model.kind = 'linear' or 'hertz')"
+            for i, contact in enumerate(case.contacts)
+            for key in ("duration", "stiffness")
+            if getattr(contact, key) is not None
+        ]
     problems = []
     if case.solver.substeps != 1:
         problems.append(
@@ -324,8 +330,12 @@ def _contact_model(case: Case) -> list[str]:
 
 def _hertz_moduli(case: Case) -> list[str]:
     """Hertz stiffness comes from contact_model.stiffness or duration, shared, or from every
-    contact material's Young's modulus and Poisson's ratio: one of them, whole."""
-    used = sorted({m for c in case.contacts for m in c.pair if m in case.materials})
+    contact material's Young's modulus and Poisson's ratio: one of them, whole (a pair with
+    its own stiffness or duration needs neither)."""
+    used = sorted(
+        {m for c in case.contacts for m in c.pair
+         if m in case.materials and c.stiffness is None and c.duration is None}
+    )  # fmt: skip
     given = [m for m in used if case.materials[m].youngs_modulus is not None]
     cm = case.contact_model
     shared = "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""

@@ -470,11 +470,33 @@ class Material(Strict):
 
 
 class ContactPair(Strict):
-    """[[contacts]]: restitution and friction of one pair of materials."""
+    """[[contacts]]: restitution and friction of one pair of materials; with soft contacts
+    also, if it differs from the others, the pair's own stiffness (by ``duration`` or
+    ``stiffness``, as in [contact_model], which the other pairs take)."""
 
     pair: tuple[str, str] = Field(description="two [materials] names (order does not matter)")
     restitution: float = Field(ge=0, le=1, description="coefficient of restitution e, in [0, 1]")
     friction: float = Field(ge=0, le=2, description="Coulomb friction coefficient f, in [0, 2]")
+    duration: float | None = Field(
+        None,
+        ge=1e-9,
+        le=0.01,
+        description="soft contacts: this pair's contact duration t_c, s, in [1e-9, 0.01]: that "
+        "of a granule striking a rigid wall head-on with this pair's restitution (hertz: at "
+        "the fastest relative speed); sets this pair's k_n instead of [contact_model]'s",
+    )
+    stiffness: float | None = Field(
+        None,
+        ge=1,
+        description="soft contacts: this pair's normal stiffness k_n, >= 1: N/m (linear) or "
+        "(4/3)E*, Pa (hertz), instead of [contact_model]'s",
+    )
+
+    @model_validator(mode="after")
+    def _one_stiffness(self) -> ContactPair:
+        if self.duration is not None and self.stiffness is not None:
+            raise ValueError("give this pair's duration (s) or its stiffness, not both")
+        return self
 
 
 class PaperStudy(Strict):

@@ -109,12 +109,19 @@ def normal_stiffness(case: Case) -> float:
         return cm.stiffness
     if cm.duration is None:
         raise ValueError("contact_model: no stiffness or duration shared by every pair")
-    e, m = case.granule_hammer_contact.restitution, case.granule_mass
+    return stiffness_for_duration(case, cm.duration, case.granule_hammer_contact.restitution)
+
+
+def stiffness_for_duration(case: Case, duration: float, e: float) -> float:
+    """The k_n with which a granule (of ``granules.radius`` and its mass) striking a rigid wall
+    head-on with restitution ``e`` stays ``duration`` (s) in contact: N/m (linear), or
+    (4/3)E*, Pa (Hertz, at the fastest relative speed)."""
+    cm, m = case.contact_model, case.granule_mass
     if cm.kind == "linear":
-        return LinearSpringDashpot.from_duration(cm.duration, e, m, cm.end).k
+        return LinearSpringDashpot.from_duration(duration, e, m, cm.end).k
     v = max(fastest_relative_speed(case), 1e-3)
     unit = HertzTsuji.from_restitution(1.0, e, m, cm.end).impact(v).duration  # at k = 1
-    return (unit / cm.duration) ** 2.5 / math.sqrt(case.granules.radius)
+    return (unit / duration) ** 2.5 / math.sqrt(case.granules.radius)
 
 
 def effective_modulus(a: Material, b: Material) -> float:
@@ -129,12 +136,17 @@ def effective_modulus(a: Material, b: Material) -> float:
 
 
 def pair_stiffness(case: Case, a: str, b: str) -> float:
-    """k_n of the soft contacts between materials ``a`` and ``b``: N/m (linear,
-    :func:`normal_stiffness`) or (4/3)E*, Pa (Hertz: from contact_model.stiffness or duration,
-    :func:`normal_stiffness`, else from the materials' Young's moduli and Poisson's ratios,
-    :func:`effective_modulus`); a Hertz
-    contact's stiffness is this times √R*, R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
-    cm = case.contact_model
+    """k_n of the soft contacts between materials ``a`` and ``b``: N/m (linear) or (4/3)E*, Pa
+    (Hertz): the pair's own (its [[contacts]] stiffness, or duration by
+    :func:`stiffness_for_duration` with its restitution), else contact_model's
+    (:func:`normal_stiffness`), else (Hertz) from the materials' Young's moduli and Poisson's
+    ratios (:func:`effective_modulus`); a Hertz contact's stiffness is this times √R*,
+    R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
+    cm, pair = case.contact_model, case.contact(a, b)
+    if pair.stiffness is not None:
+        return pair.stiffness
+    if pair.duration is not None:
+        return stiffness_for_duration(case, pair.duration, pair.restitution)
     if cm.kind == "hertz" and cm.stiffness is None and cm.duration is None:
         return 4.0 / 3.0 * effective_modulus(case.materials[a], case.materials[b])
     return normal_stiffness(case)
