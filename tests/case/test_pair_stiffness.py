@@ -66,3 +66,17 @@ def test_a_pairs_stiffness_refusals() -> None:
         load_case(SOFT, overrides=both)
     with pytest.raises(CaseError, match=rf"contacts\[{GRANULES}\]\.duration: .*rigid contacts"):
         load_case(RIGID, overrides=[f"contacts[{GRANULES}].duration=1e-4"])
+
+
+def test_hertz_pairs_with_their_own_stiffness_need_no_moduli(tmp_path: Path) -> None:
+    """Hertz without a shared stiffness takes each pair's from its materials' moduli, unless the
+    pair has its own: every pair given its own → taken without moduli; one left → refused,
+    naming the materials that then need them."""
+    text = SOFT.read_text().replace('kind = "linear"\nduration = 1e-4', 'kind = "hertz"')
+    assert 'kind = "hertz"' in text
+    case = tmp_path / "hertz.toml"
+    case.write_text(text)
+    both = ["contacts[0].duration=1e-4", f"contacts[{GRANULES}].stiffness=1e7"]
+    load_case(case, overrides=both)
+    with pytest.raises(CaseError, match=r"materials\.beebread: Hertz contacts without"):
+        load_case(case, overrides=both[:1])
