@@ -85,9 +85,11 @@ class RigidContacts:
         if any(spec.gravity):  # after the pair setters, which set the pair's restitution
             self.bodies.listen("pre_solve", wall_bounce, ("granule", "wall"))
         feed = spec.process.feed
-        sliding = not all(g.rolls for g in spec.granules) or (feed is not None and not feed.rolls)
+        rolls = {g.rolls for g in spec.granules} | ({feed.rolls} if feed is not None else set())
+        sliding = False in rolls
         if sliding:
             self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
+        if rolls == {True, False}:  # two sliding points need nothing (sliding_point)
             self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
         self.recorder = (
             ImpactRecorder(self.bodies, rewritten=bool(outline) or sliding)
