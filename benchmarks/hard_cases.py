@@ -49,10 +49,13 @@ def one(case: str, overrides: list[str], duration: float) -> str:
         sim.run(duration)
     except Exception as exc:  # a row of the table, whatever stopped the run
         return f"failed at t = {sim.time:.4g} s: {type(exc).__name__}: {exc}"[:140]
-    closure = sim.energy().closure
-    verdict = "within 1 %" if abs(closure) <= 0.01 else "MISSES 1 %"
+    ledger = sim.energy()
+    verdict = "within 1 %" if abs(ledger.closure) <= 0.01 else "MISSES 1 %"
     wall = time.perf_counter() - start
-    return f"closure {closure:+.2%} ({verdict}), {len(sim.impacts)} impacts, {wall:.1f} s"
+    return (
+        f"closure {ledger.closure:+.2%} of {ledger.energy_in_play:.3g} J ({verdict}; residual "
+        f"{ledger.residual:+.2g} J), {len(sim.impacts)} impacts, {wall:.1f} s"
+    )
 
 
 def main() -> None:

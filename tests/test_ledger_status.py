@@ -4,6 +4,7 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from perga.cli import main
@@ -26,6 +27,11 @@ def test_the_tolerance_is_judged_on_both_sides_of_its_limit(tmp_path: Path, caps
     _, first = _run("soft-single-granule.toml", tmp_path / "a", *sets)
     closure = first["energy"]["closure"]
     assert 1e-5 < abs(closure) < 0.01  # measured -5.0e-4: the limit is above the schema's 1e-6
+    table = np.genfromtxt(tmp_path / "a" / "energy.csv", delimiter=",", names=True)
+    assert np.all(table["energy_in_play"] > 0)
+    assert np.allclose(table["closure"], table["residual"] / table["energy_in_play"], rtol=1e-12)
+    last = {k: first["energy"][k] for k in ("residual", "energy_in_play", "closure")}
+    assert last == {k: table[k][-1] for k in last}
     above = f"solver.ledger_tolerance={1.01 * abs(closure)!r}"
     status, summary = _run("soft-single-granule.toml", tmp_path / "b", *sets, above)
     assert (status, summary["status"], summary["reason"]) == (0, "completed", "")
@@ -60,5 +66,6 @@ def test_a_rigid_step_error_is_caught_and_its_remedy_works(tmp_path: Path) -> No
 
 def test_a_closure_that_is_not_a_number_is_off() -> None:
     summary = RunSummary(case="x", status="completed")
-    judge_ledger(summary, float("nan"), 0.01, "take smaller steps")
+    summary.energy = {"closure": float("nan"), "energy_in_play": 0.0, "residual": float("nan")}
+    judge_ledger(summary, 0.01, "take smaller steps")
     assert summary.status == LEDGER_OFF and "take smaller steps" in summary.reason

@@ -160,6 +160,7 @@ def _run(args: argparse.Namespace) -> int:
             LEDGER_OFF,
             RunStoppedError,
             check_resumable,
+            ledger_closure_text,
             prepare_directory,
             resume_run,
             run_case,
@@ -249,7 +250,7 @@ def _run(args: argparse.Namespace) -> int:
         )
     facts = []
     if summary.energy:
-        facts.append(f"energy ledger closes to {summary.energy['closure']:+.2%}")
+        facts.append(f"energy ledger closes to {ledger_closure_text(summary.energy)}")
     if summary.speeds:
         facts.append(f"granule speeds at the end {summary.speeds['mean']:.3g} m/s mean, "
                      f"{summary.speeds['max']:.3g} max")  # fmt: skip

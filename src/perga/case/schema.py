@@ -621,9 +621,10 @@ class Solver(Strict):
         0.01,
         ge=1e-6,
         le=1.0,
-        description="the largest |closure| of the energy ledger at the end (a fraction: 0.01 "
-        "is 1 %) with which a run counts as completed, in [1e-6, 1]; beyond it the run ends "
-        "'completed, ledger off' with exit status 3 (perga.engine.energy)",
+        description="the largest |closure| of the energy ledger at the end (its residual over "
+        "the energy in play, a fraction: 0.01 is 1 %) with which a run counts as completed, "
+        "in [1e-6, 1]; beyond it the run ends 'completed, ledger off' with exit status 3 "
+        "(perga.engine.energy)",
     )
     threads: int | Literal["auto"] = Field(
         "auto",

@@ -33,15 +33,23 @@ The terms:
   ideal pin does none; Chipmunk's pulls the drifting anchors together and does, first order
   in dt. Unbooked, it was the whole residual before a run's first impact
   (docs/reliability.md).
-* ``closure`` = (drive_work + gravity_work + joint_correction − ΔKE − Δelastic −
-  contact_dissipation − friction − drag) / max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|,
-  ½Σ_i|ΔKE_i|, 1e-30 J): what the steps lose or make besides that (the first-order split of
-  the kicks; the hammers' velocity held through soft granule substeps; the rigid impulses'
-  step error; each falls with the step, docs/reliability.md) and rounding (the swing stops'
-  and hinge friction's work is booked signed by their effects,
-  :class:`~perga.engine.effects.ConstraintLosses`). The term
-  ½Σ_i|ΔKE_i| (kinetic energy moved between bodies) keeps the closure meaningful where nothing
-  is driven or lost, e.g. an elastic free impact (ΔKE = 0).
+* ``residual`` = drive_work + gravity_work + joint_correction + inflow − outflow − ΔKE −
+  Δelastic − contact_dissipation − friction − drag, J: what the steps lose or make besides
+  that (the first-order split of the kicks; the hammers' velocity held through soft granule
+  substeps; the rigid impulses' step error; each falls with the step, docs/reliability.md)
+  and rounding (the swing stops' and hinge friction's work is booked signed by their effects,
+  :class:`~perga.engine.effects.ConstraintLosses`).
+* ``energy_in_play`` = max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|, ½Σ_i|ΔKE_i|,
+  inflow, outflow, the granules' kinetic + elastic energy now and at t = 0, 1e-30 J), J: the
+  work done and the energy the granules hold. ½Σ_i|ΔKE_i| (kinetic energy moved between
+  bodies) keeps it meaningful where nothing is driven or lost (an elastic free impact,
+  ΔKE = 0); the granules' energy where nothing has happened yet (granules fed in flight).
+  The machine's own kinetic energy is not in it: a hammer carried round at constant speed
+  holds tens of joules that nothing exchanges, and would hide a residual of the granules'
+  scale (docs/reliability.md).
+* ``closure`` = residual / energy_in_play: what ``solver.ledger_tolerance`` judges. The
+  residual itself (J) is kept beside it, so that a long run whose work done has grown large
+  still shows its absolute error.
 
 Costs per step: numpy over the few rotor-driven bodies of the machine's states before and after
 the step (:meth:`~perga.engine.machine.Machine.state`, one batch read each, which the simulation

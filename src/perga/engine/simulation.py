@@ -206,7 +206,8 @@ class Simulation:
         """The energy ledger since the simulation was created (J; needs ``track_energy``)."""
         if self.meter is None:
             raise RuntimeError("energy() needs Simulation(..., track_energy=True)")
-        return (self.meter.terms() + self.contacts.energy_terms()).close()
+        granules = self.contacts.energy_terms()
+        return (self.meter.terms() + granules).close(granules)
 
     def frame(self, *, contacts: bool = True) -> Frame:
         """The simulation now as a :class:`~perga.model.frame.Frame` (with the ledger when

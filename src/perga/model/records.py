@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 TINY = 1e-30
-"""J: the closure's denominator floor (a scene where nothing moves has closure 0)."""
+"""J: the floor of the energy in play (a scene where nothing moves has closure 0)."""
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,8 @@ class Events:
 class EnergyLedger:
     """Cumulative energy terms since t = 0, J (SI); ``closure`` is dimensionless.
 
-    The terms and the closure are defined in :mod:`perga.engine.energy`."""
+    The terms, the residual, the energy in play and the closure are defined in
+    :mod:`perga.engine.energy`."""
 
     kinetic: float
     """Current kinetic energy of all moving bodies and granules (translation and rotation)."""
@@ -127,9 +128,14 @@ class EnergyLedger:
     """Energy removed by floor and hinge friction."""
     drag: float
     """Energy removed by air drag."""
+    residual: float
+    """drive + gravity + joint correction + inflow − outflow − ΔKE − Δelastic − contact −
+    friction − drag: what the ledger misses."""
+    energy_in_play: float
+    """The energy the residual is judged against: the largest of the work done, the energy
+    moved between bodies and the granules' energy now and at the start."""
     closure: float
-    """(drive + gravity + joint correction + inflow − outflow − ΔKE − Δelastic − contact −
-    friction − drag) / energy scale."""
+    """residual / energy_in_play."""
     elastic: float = 0.0
     """Energy stored in soft contacts now (0 with rigid contacts)."""
     elastic_initial: float = 0.0
@@ -168,9 +174,12 @@ class LedgerTerms:
             **{f.name: getattr(self, f.name) + getattr(other, f.name) for f in fields(self)}
         )
 
-    def close(self) -> EnergyLedger:
-        """The ledger with its closure: the residual over the largest of |drive_work|, |ΔKE +
-        Δelastic|, |gravity_work|, ``moved`` and :data:`TINY`."""
+    def close(self, granules: LedgerTerms) -> EnergyLedger:
+        """The ledger with its closure: the residual over the energy in play, the largest of
+        |drive_work|, |ΔKE + Δelastic|, |gravity_work|, ``moved``, inflow, outflow, the
+        granules' kinetic and elastic energy now and at the start (``granules``: their own
+        terms, a part of these) and :data:`TINY`. The machine's own kinetic energy is left out:
+        a hammer carried round at constant speed holds energy that nothing exchanges."""
         change = self.kinetic - self.kinetic_initial + self.elastic - self.elastic_initial
         residual = (
             self.drive_work
@@ -183,13 +192,15 @@ class LedgerTerms:
             - self.friction
             - self.drag
         )
-        scale = max(
+        in_play = max(
             abs(self.drive_work),
             abs(change),
             abs(self.gravity_work),
             self.moved,
             self.inflow,
             self.outflow,
+            granules.kinetic + granules.elastic,
+            granules.kinetic_initial + granules.elastic_initial,
             TINY,
         )
         return EnergyLedger(
@@ -200,7 +211,9 @@ class LedgerTerms:
             contact_dissipation=self.contact_dissipation,
             friction=self.friction,
             drag=self.drag,
-            closure=residual / scale,
+            residual=residual,
+            energy_in_play=in_play,
+            closure=residual / in_play,
             elastic=self.elastic,
             elastic_initial=self.elastic_initial,
             inflow=self.inflow,

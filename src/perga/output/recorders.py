@@ -210,7 +210,8 @@ class OutflowRecorder(EventRecorder):
 
 
 class EnergyRecorder(TableRecorder):
-    """energy.csv: the cumulative energy ledger at each frame (J)."""
+    """energy.csv: the cumulative energy ledger at each frame (J; its closure = residual /
+    energy_in_play, dimensionless)."""
 
     columns = (
         "time",
@@ -222,6 +223,8 @@ class EnergyRecorder(TableRecorder):
         "inflow",
         "outflow",
         "joint_correction",
+        "residual",
+        "energy_in_play",
         "closure",
     )
 
@@ -235,7 +238,8 @@ class EnergyRecorder(TableRecorder):
             raise ValueError("energy.csv needs frames with the energy ledger (track_energy)")
         self.table.write(
             [(frame.time, e.kinetic, e.drive_work, e.contact_dissipation, e.friction, e.drag,
-              e.inflow, e.outflow, e.joint_correction, e.closure)]
+              e.inflow, e.outflow, e.joint_correction, e.residual, e.energy_in_play,
+              e.closure)]
         )  # fmt: skip
 
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from perga.output.figures import new_figure, save
 from perga.output.render import render
+from perga.runner import ledger_closure_text
 from perga.stats.tables import Run, load_run
 
 ENERGY_TERMS = ("drive_work", "contact_dissipation", "friction", "drag", "joint_correction",
@@ -33,7 +34,7 @@ def _energy(run: Run, out: Path) -> str:
     terms.set_title("energy ledger: cumulative terms")
     closure.plot(e["time"], 100.0 * e["closure"], color="k")
     closure.set_xlabel("time, s")
-    closure.set_ylabel("closure, %")
+    closure.set_ylabel("closure, % of the energy in play")
     save(fig, out / "energy.png")
     return "![energy](energy.png)"
 
@@ -79,6 +80,15 @@ def _paths(run: Run, out: Path) -> str:
     return "![paths](paths.png)"
 
 
+def _closure(energy: dict) -> str:
+    """The ledger's closure in words; runs before 2026-11-26 kept no residual."""
+    if energy.get("closure") is None:
+        return "not kept"
+    if "residual" not in energy:
+        return f"{energy['closure']:+.3%}"
+    return ledger_closure_text(energy)
+
+
 def write_run_report(directory: Path, out: Path | None = None) -> Path:
     """Write the report of the run in ``directory`` to ``out`` (default ``RUN/report``);
     returns the path of report.md."""
@@ -87,14 +97,13 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     s = run.summary
     energy = s.get("energy") or {}
-    closure = energy.get("closure")
     rows = [
         ("status", f"{s.get('status')}" + (f": {s['reason']}" if s.get("reason") else "")),
         ("simulated", f"{s.get('simulated_time', 0):.4g} s in {s.get('steps')} steps of "
                       f"{s.get('dt', 0):.3g} s, {s.get('wall_time', 0):.3g} s of wall time"),
         ("granules, hammers", f"{s.get('granules')}, {s.get('hammers')}"),
         ("granule-hammer impacts", f"{s.get('impacts')}"),
-        ("energy ledger closure", "not kept" if closure is None else f"{closure:+.3%}"),
+        ("energy ledger closure", _closure(energy)),
     ]  # fmt: skip
     if s.get("speeds"):
         rows.append(("granule speeds at the end", f"{s['speeds']['mean']:.3g} m/s mean, "
