@@ -673,6 +673,15 @@ class ContactModel(Strict):
     tangential_ratio: float = Field(
         2.0 / 7.0, ge=0, le=1, description="k_t/k_n, in [0, 1]; default 2/7 (as LAMMPS)"
     )
+    tangential_damping: float = Field(
+        0.0,
+        ge=0,
+        lt=1,
+        description="tangential damping ratio ζ_t, in [0, 1): a dashpot −2ζ_t√(k_t m_eff)·v_t "
+        "beside the tangential spring of every soft contact (a sticking contact's tangential "
+        "oscillation decays at ζ_t√(m_eff/m_t) of critical, m_t the contact's tangential "
+        "effective mass: √3 ζ_t for a disc at a wall); default 0",
+    )
     rolling: float = Field(
         0.0, ge=0, le=1, description="rolling-resistance coefficient μ_r, in [0, 1]"
     )
@@ -699,8 +708,12 @@ class ContactModel(Strict):
     @model_validator(mode="after")
     def _stiffness_given(self) -> ContactModel:
         if self.kind == "rigid":
-            if self.duration is not None or self.stiffness is not None:
-                raise ValueError("duration and stiffness are for kind = 'linear' or 'hertz'")
+            soft_only = sorted(self.model_fields_set - {"kind"})
+            if soft_only:
+                raise ValueError(
+                    f"{', '.join(soft_only)}: for kind = 'linear' or 'hertz' (soft contacts); "
+                    "rigid contacts take none"
+                )
         elif self.kind == "linear" and (self.duration is None) == (self.stiffness is None):
             raise ValueError("kind = 'linear' needs exactly one of duration (s) or stiffness (N/m)")
         elif self.kind == "hertz" and self.duration is not None and self.stiffness is not None:

@@ -110,6 +110,7 @@ def _contact_model(case: Case) -> RigidContactSpec | SoftContactSpec:
     return SoftContactSpec(
         model=cm.kind,
         tangential_ratio=cm.tangential_ratio,
+        tangential_damping=cm.tangential_damping,
         rolling=cm.rolling,
         end=cm.end,
         substeps=cm.granule_substeps,

@@ -383,7 +383,8 @@ class SoftContactSpec:
     """Soft granule contacts (:mod:`perga.contact.soft`) instead of Pymunk impulses.
 
     model: 'linear' or 'hertz' (each pair's k_n: :attr:`ContactSpec.stiffness`);
-    tangential_ratio: k_t/k_n; rolling: rolling-resistance coefficient μ_r;
+    tangential_ratio: k_t/k_n; tangential_damping: ratio ζ_t of the tangential dashpot
+    −2ζ_t√(k_t m_eff)·v_t, in [0, 1); rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
     ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
     asked for (None: "auto", :mod:`perga.contact.soft.threads`). Damping per pair comes from
@@ -392,6 +393,7 @@ class SoftContactSpec:
 
     model: Literal["linear", "hertz"]
     tangential_ratio: float = 2.0 / 7.0
+    tangential_damping: float = 0.0
     rolling: float = 0.0
     end: Literal["force", "overlap"] = "force"
     substeps: int = 1
@@ -405,6 +407,8 @@ class SoftContactSpec:
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 problems.append(f"{name} must be finite and >= 0 (got {value})")
+        if not 0.0 <= self.tangential_damping < 1.0:
+            problems.append(f"tangential_damping must be in [0, 1) (got {self.tangential_damping})")
         if self.end not in ("force", "overlap"):
             problems.append(f"end must be 'force' or 'overlap' (got {self.end!r})")
         if not (isinstance(self.substeps, int) and self.substeps >= 1):

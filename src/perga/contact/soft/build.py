@@ -51,6 +51,7 @@ def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
                 friction=f,
                 rolling=rolling,
                 kt_ratio=soft.tangential_ratio,
+                zeta_t=soft.tangential_damping,
                 end=soft.end,
             )
     return pair_table(len(materials), rows)
@@ -71,7 +72,9 @@ def polygon_table(
                 c = spec.contact(a, b)
                 assert c.stiffness is not None
                 k_n[i, j], e[i, j], f[i, j] = c.stiffness, c.restitution, c.friction
-    return contact_table(k_n, soft.tangential_ratio * k_n, e, f, soft.model, soft.end)
+    return contact_table(
+        k_n, soft.tangential_ratio * k_n, e, f, soft.model, soft.end, soft.tangential_damping
+    )
 
 
 def soft_granules(

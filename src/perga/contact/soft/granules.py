@@ -376,7 +376,7 @@ class SoftGranules:
         polygons = (
             (p.vertices, p.start, p.com, p.velocity, p.omega, p.kind, p.mass, p.inertia, p.pivot,
              p.mat, p.solid, p.corner),
-            (t.law, t.k_n, t.k_t, t.damping, t.friction, t.clamp),
+            (t.law, t.k_n, t.k_t, t.damping, t.friction, t.clamp, t.damping_t),
             self.polygon_hist,
             (p.force, p.torque, p.moment),
         )  # fmt: skip

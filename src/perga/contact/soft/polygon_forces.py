@@ -174,7 +174,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     com, pvel, pomega, kind = poly.com, poly.velocity, poly.omega, poly.kind
     pmass, pinertia, pivot, pmat = poly.mass, poly.inertia, poly.pivot, poly.mat
     law, k_n, k_t, damping = table.law, table.k_n, table.k_t, table.damping
-    friction, clamp = table.friction, table.clamp
+    friction, clamp, damping_t = table.friction, table.clamp, table.damping_t
     xi = x[i, 0]
     yi = x[i, 1]
     ri = r[i]
@@ -243,7 +243,7 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
         hertz = 1.0
         kt = k_t[a, b] * math.sqrt(ri * max(delta, 0.0))
     fn, ft, xi_t, dissipated = contact_force(
-        kn, damp, hertz, clamp[a, b], kt, 0.0, friction[a, b],
+        kn, damp, hertz, clamp[a, b], kt, damping_t[a, b], friction[a, b],
         delta, rate, vt, m_eff, hist[i, k, HIST_XI], dt,
     )  # fmt: skip
     hist[i, k, HIST_XI] = xi_t

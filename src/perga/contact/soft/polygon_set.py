@@ -101,6 +101,7 @@ class TableArrays(NamedTuple):
     damping: np.ndarray
     friction: np.ndarray
     clamp: np.ndarray
+    damping_t: np.ndarray
 
 
 @dataclass
@@ -290,7 +291,8 @@ class ContactTable:
     (4/3)E* in Pa for HERTZ, the stiffness being k_n √r_i in N/m^{3/2}); k_t (N/m for LINEAR;
     Pa for HERTZ, the stiffness being k_t √(r_i δ) in N/m); damping (ζ for LINEAR, Tsuji α for
     HERTZ, both for the table's end criterion); friction f; clamp: 1.0 where the normal force is
-    clamped at zero (end "force"), 0.0 where it may pull until the overlap closes ("overlap").
+    clamped at zero (end "force"), 0.0 where it may pull until the overlap closes ("overlap");
+    damping_t: the tangential damping ratio ζ_t (dashpot −2ζ_t√(k_t m_eff)·v_t).
     """
 
     law: np.ndarray
@@ -299,10 +301,14 @@ class ContactTable:
     damping: np.ndarray
     friction: np.ndarray
     clamp: np.ndarray
+    damping_t: np.ndarray
 
     def arrays(self) -> TableArrays:
-        """(law, k_n, k_t, damping, friction, clamp), as the compiled functions take them."""
-        return TableArrays(self.law, self.k_n, self.k_t, self.damping, self.friction, self.clamp)
+        """(law, k_n, k_t, damping, friction, clamp, damping_t), as the compiled functions take
+        them."""
+        return TableArrays(
+            self.law, self.k_n, self.k_t, self.damping, self.friction, self.clamp, self.damping_t
+        )
 
 
 def contact_table(
@@ -312,8 +318,10 @@ def contact_table(
     friction: float | np.ndarray,
     law: str = "linear",
     end: str = "force",
+    damping_t: float = 0.0,
 ) -> ContactTable:
-    """Contact table from k_n, k_t, restitution e and friction f (scalars or (n_gm, n_pm) arrays).
+    """Contact table from k_n, k_t, restitution e and friction f (scalars or (n_gm, n_pm) arrays)
+    and one tangential damping ratio ζ_t in [0, 1).
 
     k_n, k_t: N/m (``law="linear"``) or Pa (``law="hertz"``: stiffnesses k_n √r_i and
     k_t √(r_i δ), see ``ContactTable``). The damping is tuned for the end criterion ``end``:
@@ -331,6 +339,8 @@ def contact_table(
     kn, kt, ee, ff = (np.ascontiguousarray(a) for a in arrays)
     if np.any(kn <= 0.0) or np.any(kt < 0.0) or np.any(ff < 0.0):
         raise ValueError("need k_n > 0, k_t >= 0, friction >= 0")
+    if not 0.0 <= damping_t < 1.0:
+        raise ValueError(f"damping_t must be in [0, 1) (got {damping_t})")
     tune = damping_ratio if law == "linear" else tsuji_alpha
     damping = np.vectorize(lambda x: tune(float(x), end), otypes=[np.float64])(ee)
     return ContactTable(
@@ -340,6 +350,7 @@ def contact_table(
         damping=np.ascontiguousarray(damping),
         friction=ff,
         clamp=np.full(kn.shape, 1.0 if end == "force" else 0.0),
+        damping_t=np.full(kn.shape, float(damping_t)),
     )
 
 
@@ -367,6 +378,7 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
         damping=np.zeros((0, 0)),
         friction=np.zeros((0, 0)),
         clamp=np.zeros((0, 0)),
+        damping_t=np.zeros((0, 0)),
     )
     return polygons, table
 
