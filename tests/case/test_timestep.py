@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from perga.analytic.contact import HERTZ_DURATION_COEFFICIENT, tunnelling_time_step
-from perga.case import load_case
+from perga.case import CaseError, load_case
 from perga.case.timestep import (
     MAX_ROTATION_PER_STEP,
     contact_durations,
@@ -98,3 +98,54 @@ def test_gravity_in_the_plane_adds_a_fall_across_the_chamber(tmp_path):
     assert fastest_relative_speed(vertical) == pytest.approx(
         fastest_relative_speed(flat) + math.sqrt(4 * 9.80665 * 0.2), rel=1e-12
     )
+
+
+@pytest.mark.parametrize(("factor", "refused"), [(0.99, False), (1.01, True)])
+def test_the_tunnelling_check_on_both_sides_of_its_limit(tmp_path, factor, refused):
+    """solver.dt at 0.99 and 1.01 of the tunnelling limit of single-granule.toml, the limit
+    worked out here from the case's numbers alone (issue 18, item 2; the code's
+    ``fastest_relative_speed`` is not used): the hammer tip 80 + 60 − 5 mm from the axis at
+    600 rpm, v = 2π·10 s⁻¹ · 0.135 m; the plate 28.26 g of steel, 60 × 20 mm, is
+    m/(ρ·L·W) = 3.0 mm thick, thinner than the 10 mm wall; dt* = 0.5·(r + t/2)/v. The
+    rotor's own limit, 0.05 rad per step (8.0e-4 s), is 3.4 times as long."""
+    v = 2 * math.pi * 600 / 60 * (0.08 + 0.06 - 0.005)
+    thickness = 0.02826 / (7850.0 * 0.06 * 0.02)
+    limit = 0.5 * (0.0025 + thickness / 2) / v
+    assert 0.05 / (2 * math.pi * 10) > 3 * limit
+    path = tmp_path / "case.toml"
+    path.write_text(SINGLE)
+    dt = f"solver.dt={factor * limit!r}"
+    if not refused:
+        assert load_case(path, overrides=[dt]).solver.dt == factor * limit
+        return
+    with pytest.raises(CaseError, match="lets a granule pass through a hammer or the wall") as e:
+        load_case(path, overrides=[dt])
+    assert f"{limit:.3g} s" in str(e.value)
+
+
+@pytest.mark.parametrize(("factor", "refused"), [(0.99, False), (1.01, True)])
+@pytest.mark.parametrize("check", ["rotation", "contact"])
+def test_the_rotation_and_contact_checks_on_both_sides_of_their_limits(
+    tmp_path, check, factor, refused
+):
+    """solver.dt at 0.99 and 1.01 of each limit, worked out here from the case's numbers:
+    the rotor turns at most 0.05 rad a step, 0.05/(2π·10 s⁻¹) at 600 rpm (a 15 mm granule,
+    whose tunnelling limit is longer); a soft contact takes at least 10 steps, t_c/10 with t_c
+    = 1e-4 s as given (a welded hammer on a kinematic rotor is as stiff as the wall: every
+    contact lasts t_c)."""
+    if check == "rotation":
+        text = SINGLE.replace("radius = 0.0025", "radius = 0.015")
+        text = text.replace("positions = [[0.0, 0.11]]", "positions = [[0.0, 0.17]]")
+        limit, message = 0.05 / (2 * math.pi * 10), "the rotor turns"
+    else:
+        text = SINGLE.replace('mount = "hinged"', 'mount = "welded"')
+        text += '\n[contact_model]\nkind = "linear"\nduration = 1e-4\n'
+        limit, message = 1e-4 / 10, "resolves the shortest contact"
+    path = tmp_path / "case.toml"
+    path.write_text(text)
+    dt = f"solver.dt={factor * limit!r}"
+    if not refused:
+        assert load_case(path, overrides=[dt]).solver.dt == factor * limit
+        return
+    with pytest.raises(CaseError, match=message):
+        load_case(path, overrides=[dt])
