@@ -6,7 +6,6 @@ of their limits."""
 
 from __future__ import annotations
 
-import filecmp
 import random
 import shutil
 import signal
@@ -22,6 +21,7 @@ from perga import checkpoints
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
+from tests.run_files import assert_same_outputs, outputs
 
 ROOT = Path(__file__).resolve().parents[1]
 RIGID = ["solver.duration=0.3", "solver.substeps=2", "output.checkpoint_every=0.02"]
@@ -54,23 +54,6 @@ def start(case: str, out: Path, sets: list[str]) -> subprocess.Popen[str]:
         stderr=subprocess.PIPE,
         text=True,
     )
-
-
-def outputs(run: Path) -> list[str]:
-    """The run's tables and frames (not its summary, which counts wall time and resumptions,
-    nor its checkpoints)."""
-    return sorted(
-        str(p.relative_to(run))
-        for p in run.rglob("*")
-        if p.is_file() and "checkpoints" not in p.parts and p.name != "summary.json"
-    )
-
-
-def assert_same_outputs(run: Path, reference: Path, ignore: tuple[str, ...] = ()) -> None:
-    assert outputs(run) == outputs(reference)
-    differ = [f for f in outputs(reference) if not filecmp.cmp(run / f, reference / f, False)]
-    differ = [f for f in differ if f not in ignore]
-    assert differ == []
 
 
 @pytest.fixture(scope="module")
