@@ -5,6 +5,8 @@ import matplotlib.image as mpimg
 import numpy as np
 
 from perga.cli import main
+from perga.stats.tables import load_run
+from tests.figure_data import bar_heights, lines, saved_figures
 
 
 def _coloured(png) -> int:
@@ -38,3 +40,38 @@ def test_a_report_says_what_the_run_did_not_record(tmp_path, monkeypatch):
     assert "no impact figure: impacts.csv was not recorded" in report
     assert "energy ledger closure | not kept" in report
     assert main(["report", "nowhere"]) == 2
+
+
+def test_the_reports_figures_draw_the_runs_tables(tmp_path, monkeypatch):
+    """Issue 18, item 6: each figure of `perga report` holds its table's data, not merely ink.
+    The energy figure's lines are energy.csv's columns (the kinetic energy's change since the
+    first frame; the closure in per cent); the speed histograms count every granule of the
+    first and the last frame in the table's bins; the impact figure counts every impact and
+    plots each one's approach speed. Exact: the same floats are drawn (1e-12 for the sums)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["new", "separator", "-o", "x.toml"]) == 0
+    assert main(["run", "x.toml", "--quiet", "--set", "solver.duration=0.2"]) == 0
+    saved = saved_figures(monkeypatch)
+    assert main(["report", "runs/x"]) == 0
+    run = load_run(tmp_path / "runs" / "x")
+    e = run.energy
+    terms, closure = saved["energy.png"].axes
+    drawn = lines(terms)
+    assert np.array_equal(drawn["kinetic energy change"][1], e["kinetic"] - e["kinetic"][0])
+    for name in ("drive_work", "contact_dissipation", "friction", "joint_correction"):
+        x, y = drawn[name.replace("_", " ")]
+        assert np.array_equal(x, e["time"]) and np.array_equal(y, e[name]), name
+    assert np.array_equal(closure.get_lines()[0].get_ydata(), 100.0 * e["closure"])
+    g = run.granules
+    times = np.unique(g["time"])
+    bars = bar_heights(saved["speeds.png"].axes[0])
+    assert len(bars) == 60  # 30 bins for each of two frames
+    bins = np.linspace(0.0, g["speed"].max(), 31)
+    for k, t in enumerate((times[0], times[-1])):
+        counts = np.histogram(g["speed"][g["time"] == t], bins=bins)[0]
+        assert np.array_equal(bars[30 * k : 30 * (k + 1)], counts)
+        assert counts.sum() == np.count_nonzero(g["time"] == t)
+    count, speed = saved["impacts.png"].axes
+    impacts = run.impacts
+    assert len(impacts["time"]) > 0 and bar_heights(count).sum() == len(impacts["time"])
+    assert np.array_equal(speed.get_lines()[0].get_ydata(), -impacts["normal_velocity_before"])

@@ -21,6 +21,7 @@ from perga.model import GranuleSpec, RotorSpec, SceneSpec
 from perga.model.process import DamageSpec, FeedSpec, Sizes
 from perga.model.records import Impact
 from perga.output.process_figure import mass_flow
+from tests.figure_data import bar_heights, lines, saved_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 SEPARATOR = ROOT / "cases" / "bee-bread-separator.toml"
@@ -220,14 +221,29 @@ def test_fed_run_ledger_closes_to_one_percent(separator_run: Path) -> None:
     assert abs(summary["energy"]["closure"]) < 0.01
 
 
-def test_process_figure_and_its_mass_flow(separator_run: Path) -> None:
-    """perga render --process draws the run; the mass flow summed over its intervals gives the
-    mass that left (1e-12: a histogram of the same numbers)."""
+def test_process_figure_and_its_mass_flow(separator_run: Path, monkeypatch) -> None:
+    """perga render --process draws the run's tables (issue 18, item 6: the figure's data, not
+    its existence): the granules in the chamber at each frame, the releases and the outflow
+    counted one by one, the mass flow (summed over its intervals: the mass that left, 1e-12, a
+    histogram of the same numbers) and the survival histogram of every granule that left."""
+    saved = saved_figures(monkeypatch)
     assert main(["render", str(separator_run), "--process"]) == 0
-    assert (separator_run / "process.png").stat().st_size > 10_000
+    panels = saved["process.png"].axes
+    granule_times = np.array([float(r["time"]) for r in _rows(separator_run / "granules.csv")])
+    frames, present = np.unique(granule_times, return_counts=True)
+    drawn = lines(panels[0])
+    assert np.array_equal(drawn["in the chamber"][0], frames)
+    assert np.array_equal(drawn["in the chamber"][1], present)
     outflow = _rows(separator_run / "outflow.csv")
+    releases = _rows(separator_run / "releases.csv")
+    assert drawn["released from cells"][1][-1] == len(releases) > 0
+    assert drawn["gone through the outlet"][1][-1] == len(outflow) > 0
     times = np.array([float(r["time"]) for r in outflow])
     masses = np.array([float(r["mass"]) for r in outflow])
+    (stairs,) = [a for a in panels[1].patches]
+    heights, edges = stairs.get_data().values, stairs.get_data().edges
+    assert np.sum(heights * np.diff(edges)) * 1e-3 == pytest.approx(masses.sum(), rel=1e-12)
+    assert bar_heights(panels[2]).sum() == len(outflow)
     edges = np.linspace(0.0, 0.3, 31)
     rates = mass_flow(times, masses, edges)
     assert np.sum(rates * np.diff(edges)) == pytest.approx(masses.sum(), rel=1e-12)

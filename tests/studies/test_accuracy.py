@@ -13,6 +13,7 @@ import itertools
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from perga.analytic.contact import LinearSpringDashpot
@@ -28,7 +29,7 @@ from perga.studies.accuracy import (
     run_setting,
     run_study,
 )
-from perga.studies.accuracy_report import recommended_table, write_outputs
+from perga.studies.accuracy_report import ERROR_FLOOR, recommended_table, write_outputs
 from perga.studies.accuracy_scenes import (
     BounceReference,
     Setting,
@@ -38,6 +39,7 @@ from perga.studies.accuracy_scenes import (
     hinged_scene,
     soft_contact_law,
 )
+from tests.figure_data import lines, saved_figures
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +60,7 @@ def _orders(pairs: list[tuple[float, float]]) -> list[float]:
     ]
 
 
-def test_quick_study_fills_every_cell(quick, tmp_path: Path) -> None:
+def test_quick_study_fills_every_cell(quick, tmp_path: Path, monkeypatch) -> None:
     rows = quick.rows
     assert {r.reference for r in rows} == {"restitution", "hinged", "energy"}
     assert {r.model for r in rows} == {"rigid", "linear", "hertz"}
@@ -67,6 +69,7 @@ def test_quick_study_fills_every_cell(quick, tmp_path: Path) -> None:
         assert math.isfinite(r.error) and r.error >= 0, r
         assert math.isfinite(r.wall_per_sim) and r.wall_per_sim > 0, r
         assert r.steps > 0 and r.dt > 0 and r.machine_dt >= r.dt
+    saved = saved_figures(monkeypatch)
     paths = write_outputs(quick, tmp_path)
     names = {p.name for p in paths}
     assert {"accuracy.csv", "accuracy.md", "restitution.png", "hinged.png"} <= names
@@ -80,7 +83,14 @@ def test_quick_study_fills_every_cell(quick, tmp_path: Path) -> None:
     report = (tmp_path / "accuracy.md").read_text()
     for reference in ("restitution", "hinged", "energy"):
         assert f"### {reference}:" in report
-    assert all(p.stat().st_size > 10_000 for p in paths if p.suffix == ".png")
+    for reference in ("restitution", "hinged"):  # each family's errors against its cost
+        drawn = lines(saved[f"{reference}.png"].axes[0])
+        chosen = [r for r in rows if r.reference == reference]
+        for family in {r.family for r in chosen}:
+            line = sorted((r for r in chosen if r.family == family), key=lambda r: r.wall_per_sim)
+            x, y = drawn[family]
+            assert np.array_equal(x, [r.wall_per_sim for r in line])
+            assert np.array_equal(y, [max(r.error, ERROR_FLOOR) for r in line])
 
 
 def test_rigid_restitution_is_exact(quick) -> None:

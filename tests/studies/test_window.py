@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
@@ -24,6 +25,7 @@ from perga.studies.window import (
     shortfall,
     trend,
 )
+from tests.figure_data import saved_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 CASE = ROOT / "cases" / "bee-bread-separator.toml"
@@ -283,7 +285,7 @@ def test_limits_on_the_edges_are_accepted(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-def test_window_end_to_end_on_dask(tmp_path: Path) -> None:
+def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
     """The bundled separator case over 600 and 1800 rpm × 0.05 and 0.075 kg hammers, three
     replicates each, on two Dask workers: the files, and the trends physics demands: at each
     mass the expected damage rises with speed (one impact's breakage probability is 3 % at the
@@ -292,6 +294,7 @@ def test_window_end_to_end_on_dask(tmp_path: Path) -> None:
     replicates, docs/operating-window.md), and the released fraction does not fall by more than
     twice the combined sd (the comb's release needs a peak force that grows with speed)."""
     out = tmp_path / "window"
+    saved = saved_figures(monkeypatch)
     code = main(
         ["window", str(CASE), "--set", "rotor.rpm=600:1800:2", "--set", "hammers.mass=0.05:0.075:2",
          "--replicates", "3", "--set", "solver.duration=0.3", "--workers", "2", "-o", str(out),
@@ -301,6 +304,12 @@ def test_window_end_to_end_on_dask(tmp_path: Path) -> None:
     for name in ("window.parquet", "window.csv", "window.png", "report.md", "results.parquet"):
         assert (out / name).is_file(), name
     table = pq.read_table(out / "window.parquet").to_pydict()
+    for panel, metric in zip(saved["window.png"].axes, METRICS, strict=False):  # the maps' data
+        mesh = next(c for c in panel.collections if hasattr(c, "get_array"))
+        means = np.array(table[f"{metric}_mean"])
+        assert np.array_equal(
+            np.sort(mesh.get_array().compressed()), np.sort(means[~np.isnan(means)])
+        )
     points = sorted(zip(table["hammers.mass"], table["rotor.rpm"], range(4), strict=True))
     assert [(m, s) for m, s, _ in points] == [
         (0.05, 600.0), (0.05, 1800.0), (0.075, 600.0), (0.075, 1800.0)
