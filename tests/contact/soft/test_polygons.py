@@ -472,8 +472,9 @@ def test_sticking_spring_and_sliding_cap():
 @pytest.mark.parametrize("law", ["linear", "hertz"])
 def test_tangential_stiffness_and_stored_energy(law):
     """One step of slip v dt on a face pressed to δ: F_t = −k_t ξ with ξ = v_t dt, k_t = K_T
-    (LINEAR) or K_T √(r δ) (HERTZ, Mindlin-like like the granule table's P_KT √δ: twice at 4δ);
-    ``contact_energy`` = normal spring energy + ½ k_t ξ² (round-off, 1e-12)."""
+    (LINEAR) or K_T √(r δ) (HERTZ, Mindlin-like like the granule table's P_KT √δ: twice at 4δ;
+    its history is ξ√k_t, ``laws.tangential_force``); ``contact_energy`` = normal spring energy
+    + ½ k_t ξ² (round-off, 1e-12)."""
     box = _box(0.02, 0.01)
     polys = polygon_set([box], np.zeros((1, 2)), kind=[KINEMATIC])
     if law == "linear":
@@ -496,7 +497,8 @@ def test_tangential_stiffness_and_stored_energy(law):
             k_t = K_T_HERTZ * math.sqrt(R * delta)
             normal = 0.4 * K_HERTZ * math.sqrt(R) * delta**2.5
         assert f[0, 0] == pytest.approx(-k_t * dt, rel=1e-12)  # F_t = k_t dt along t
-        assert hist[0, 0, HIST_XI] == pytest.approx(-dt, rel=1e-12)
+        history = -dt * (math.sqrt(k_t) if law == "hertz" else 1.0)
+        assert hist[0, 0, HIST_XI] == pytest.approx(history, rel=1e-12)
         stored = contact_energy(x, args[0], args[2], polys, table, hist)
         assert stored == pytest.approx(normal + 0.5 * k_t * dt**2, rel=1e-12)
 

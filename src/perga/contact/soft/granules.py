@@ -449,14 +449,15 @@ class SoftGranules:
         normal: bool = True,
         tangential: bool = True,
     ) -> np.ndarray:
-        """Normal (over δ⁺) and/or tangential spring energy of contacts with rows ``rows`` and
-        effective radii ``r_eff`` (m), J."""
+        """Normal (over δ⁺) and/or tangential spring energy of contacts with rows ``rows``,
+        effective radii ``r_eff`` (m) and tangential histories ``xi`` (the stretch, m, of a
+        linear spring; the energy coordinate of a Hertz one: ``laws.tangential_force``), J."""
         delta = np.maximum(delta, 0.0)
         hertz = rows[:, P_HERTZ] != 0.0
         kn = np.where(hertz, rows[:, P_KN] * np.sqrt(r_eff), rows[:, P_KN])
-        kt = np.where(hertz, rows[:, P_KT] * np.sqrt(r_eff * delta), rows[:, P_KT])
         energy = np.where(hertz, 0.4 * kn * delta**2.5, 0.5 * kn * delta**2) * normal
-        return energy + 0.5 * kt * xi**2 * tangential
+        stored = np.where(hertz, 0.5 * xi**2, 0.5 * rows[:, P_KT] * xi**2)  # laws.spring_energy
+        return energy + stored * tangential
 
     def contact_energy(self, *, normal: bool = True, tangential: bool = True) -> float:
         """Elastic energy stored in the normal and/or tangential springs of all contacts, J:

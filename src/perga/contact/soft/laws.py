@@ -103,11 +103,11 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
 
     Dissipated energy over the step, J, from the law itself (≥ 0): normal (F_n − F_spring)·δ̇·dt
     (the dashpot's work, and the spring energy lost while F_n is clamped at 0) plus tangential
-    −F_t v_t dt − ½ k_t (ξ_new² − ξ²) (Coulomb slip, tangential damping, and the O(dt²) loss of
-    the spring's update ξ += v_t dt), with this step's k_t on both sides.
+    −F_t v_t dt − ΔE_t (Coulomb slip, tangential damping, and the O(dt²) loss of the spring's
+    update ξ += v_t dt), E_t the spring's stored energy (``tangential_force``).
     """
     fn, lost = normal_force(kn, damp, hertz, clamp, delta, ddelta, m_eff, dt)
-    ft, xi, slip = tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt)
+    ft, xi, slip = tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt, hertz)
     return fn, ft, xi, lost + slip
 
 
@@ -132,11 +132,25 @@ def normal_force(kn, damp, hertz, clamp, delta, ddelta, m_eff, dt):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt):
+def tangential_force(kt, dampt, mu, fn, vt, m_eff, h, dt, hertz):
     """The tangential half of ``contact_force`` (arguments as there) for the normal force fn, N:
-    (ft, N; the new spring ξ, m; energy dissipated by slip, damping and the spring's update, J).
-    For a frictionless undamped contact (mu = dampt = 0) it returns ft = 0, ξ = 0 and ½ k_t ξ²,
-    the energy of a dropped spring: ``kernel.pair_force`` then skips it."""
+    (ft, N; the new spring history h; energy dissipated by slip, damping and the spring's
+    update, J). For a frictionless undamped contact (mu = dampt = 0) it returns ft = 0, h = 0
+    and the energy of the dropped spring: ``kernel.pair_force`` then skips it.
+
+    The history h is the stretch ξ (m) of a linear spring, whose stored energy is ½ k_t ξ².
+    A Hertz spring's k_t = P_KT √(R*δ) changes with the overlap, so its history is the energy
+    coordinate h = ξ √k_t (stored energy ½ h², :func:`spring_energy`): the stretch is rescaled
+    to each step's k_t, ξ = h/√k_t, so a change of overlap neither makes nor loses tangential
+    energy (with ξ itself kept, ½ξ²Δk_t appeared unbooked at every change of δ), and where
+    k_t = 0 (evaluated before the discs touch) nothing is stretched, stored or lost."""
+    if hertz != 0.0:
+        if kt == 0.0:
+            return 0.0, h, 0.0
+        root = math.sqrt(kt)
+        xi = h / root
+    else:
+        xi = h
     ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0
     stretched = xi + vt * dt
     ft = -kt * stretched - ct * vt
@@ -149,7 +163,14 @@ def tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt):
     else:  # sticking: −F_t v_t dt − ½ k_t (ξ_new² − ξ²) in closed form
         lost = vt * vt * dt * (0.5 * kt * dt + ct)
         xi = stretched
-    return ft, xi, lost
+    return ft, xi * root if hertz != 0.0 else xi, lost
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def spring_energy(kt, hertz, h):
+    """Energy stored in a tangential spring of history h (``tangential_force``) and stiffness
+    k_t (N/m), J: ½ k_t h² (linear, h the stretch) or ½ h² (Hertz, h the energy coordinate)."""
+    return 0.5 * h * h if hertz != 0.0 else 0.5 * kt * h * h
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -173,14 +194,16 @@ def tangential_stiffness(params, a, b, r_eff, delta):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def released(params, a, b, r_eff, delta, xi):
-    """Energy ½ k_t ξ² of a tangential spring dropped when its contact ends at overlap delta, J.
+def released(params, a, b, r_eff, delta, h):
+    """Energy of a tangential spring of history h (``tangential_force``) dropped when its
+    contact ends at overlap delta, J.
 
-    A contact ends (the history is reset) with ξ ≠ 0 only when the law left it so at its last
-    step (tangential damping at F_n = 0, or an attractive F_n with end="overlap"); the spring
-    energy then counts as dissipated. Zero for Hertz rows (k_t = 0 at δ ≤ 0).
+    A contact ends (the history is reset) with h ≠ 0 only when the law left it so at its last
+    step (tangential damping at F_n = 0, or an attractive F_n with end="overlap", or a Hertz
+    spring still holding energy as its k_t went to 0); that energy then counts as dissipated.
     """
-    return 0.5 * tangential_stiffness(params, a, b, r_eff, delta) * xi * xi
+    kt = tangential_stiffness(params, a, b, r_eff, delta)
+    return spring_energy(kt, params[a, b, P_HERTZ], h)
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)

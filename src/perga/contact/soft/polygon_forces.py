@@ -60,7 +60,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from perga.contact.soft.laws import contact_force, touching
+from perga.contact.soft.laws import contact_force, spring_energy, touching
 from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
@@ -152,7 +152,7 @@ def _end_contact(i, k, mat, pmat, table, hist):
     xi = hist[i, k, HIST_XI]
     a = mat[i]
     b = pmat[k]
-    released = 0.5 * table.k_t[a, b] * xi * xi if table.law[a, b] == LINEAR else 0.0
+    released = spring_energy(table.k_t[a, b], 0.0 if table.law[a, b] == LINEAR else 1.0, xi)
     hist[i, k, HIST_XI] = 0.0
     hist[i, k, HIST_ACTIVE] = 0.0
     hist[i, k, HIST_RATE] = 0.0
@@ -403,14 +403,12 @@ def _contact_energy(x, r, mat, poly, table, hist, normal, tangential):
             b = pmat[k]
             if law[a, b] == LINEAR:
                 spring = 0.5 * k_n[a, b] * delta * delta
-                kt = k_t[a, b]
             else:
                 spring = 0.4 * k_n[a, b] * math.sqrt(r[i]) * delta * delta * math.sqrt(delta)
-                kt = k_t[a, b] * math.sqrt(r[i] * delta)
             if normal:
                 energy[i] += spring
             if tangential:
-                energy[i] += 0.5 * kt * xi * xi
+                energy[i] += spring_energy(k_t[a, b], 0.0 if law[a, b] == LINEAR else 1.0, xi)
     return energy.sum()
 
 
