@@ -15,6 +15,7 @@ from perga.cli import main
 from perga.studies.calibrate import calibrate
 from perga.studies.study_file import Parameter, Study
 from perga.studies.sweep import sweep
+from tests.figure_data import lines, saved_figures
 
 ROOT = Path(__file__).resolve().parents[2]
 CASE = ROOT / "cases" / "rebound-test.toml"
@@ -39,13 +40,14 @@ def _synthetic(path: Path, work: Path, seed: int) -> None:
             writer.writerow(cells)
 
 
-def test_least_squares_recovers_known_values(tmp_path: Path) -> None:
+def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> None:
     """Restitution and friction together from rebound restitutions: both known values fall in
     the 95 % intervals, which are a few standard errors wide (the fit is not vacuous: a
     noise-free parameter would sit within 1e-3 of its value; here intervals of ~0.01)."""
     data = tmp_path / "measured.csv"
     _synthetic(data, tmp_path / "truth", seed=11)
     out = tmp_path / "fit"
+    saved = saved_figures(monkeypatch)
     fit = calibrate(CASE, data, FITS, out, workers=2)
     for key, (lo, hi), value in zip(fit.keys, fit.intervals, fit.values, strict=True):
         assert lo < TRUE[key] < hi, (key, lo, hi)
@@ -54,8 +56,19 @@ def test_least_squares_recovers_known_values(tmp_path: Path) -> None:
     assert record["method"] == "least-squares" and len(record["simulated"]) == 6
     best = (out / "best.toml").read_text()
     assert f"restitution = {fit.values[0]!r}" in best
-    for name in ("fit.png", "residuals.png"):
-        assert (out / name).stat().st_size > 10_000
+    # the figures draw the fit's numbers (issue 18, item 6): the measured points, the model at
+    # the fit (in the abscissa's order) and each row's residual
+    with data.open() as f:
+        rows = list(csv.DictReader(f))
+    panels = saved["fit.png"].axes
+    residuals = saved["residuals.png"].axes[0].get_lines()  # one per metric, then the zero line
+    assert len(panels) == len(SD) == len(residuals) - 1
+    for j, panel in enumerate(panels):
+        measured = [float(row[panel.get_ylabel()]) for row in rows]
+        assert sorted(panel.containers[0].lines[0].get_ydata()) == sorted(measured)
+        model = lines(panel)["model at the fit"][1]
+        assert sorted(model) == sorted(v[j] for v in record["simulated"])
+        assert np.array_equal(residuals[j].get_ydata(), np.array(fit.residuals)[:, j])
 
 
 @pytest.mark.slow
