@@ -142,8 +142,8 @@ def tangential_force(kt, dampt, mu, fn, vt, m_eff, h, dt, hertz):
     A Hertz spring's k_t = P_KT √(R*δ) changes with the overlap, so its history is the energy
     coordinate h = ξ √k_t (stored energy ½ h², :func:`spring_energy`): the stretch is rescaled
     to each step's k_t, ξ = h/√k_t, so a change of overlap neither makes nor loses tangential
-    energy (with ξ itself kept, ½ξ²Δk_t appeared unbooked at every change of δ), and where
-    k_t = 0 (evaluated before the discs touch) nothing is stretched, stored or lost."""
+    energy, and where k_t = 0 (evaluated before the discs touch) nothing is stretched, stored
+    or lost (docs/validation.md)."""
     if hertz != 0.0:
         if kt == 0.0:
             return 0.0, h, 0.0
