@@ -54,7 +54,11 @@ MODULES = {
     ),
     "timestep": Module(
         "src/perga/case/timestep.py",
-        ("tests/case/test_timestep.py", "tests/case/test_pair_stiffness.py"),
+        (
+            "tests/case/test_timestep.py",
+            "tests/case/test_pair_stiffness.py",
+            "tests/case/test_materials.py",
+        ),
     ),
     "records": Module("src/perga/model/records.py", ("tests/engine/test_energy.py",)),
     "energy": Module("src/perga/engine/energy.py", ("tests/engine/test_energy.py",)),
@@ -234,20 +238,22 @@ def resume(name: str) -> None:
     )
 
 
-def rerun_survivors(name: str) -> None:
-    """Run again only the mutants of ``name`` that survived (after tests were added: a mutant
-    the unchanged old tests killed stays killed)."""
+def rerun(name: str, outcome: str) -> None:
+    """Run again the mutants of ``name`` that survived (``outcome`` "survived": after tests were
+    added, a mutant the unchanged old tests killed stays killed) or timed out ("timeout": with
+    a longer ``timeout`` in ``MODULES``)."""
     from cosmic_ray.work_db import WorkDB, WorkResultStorage, use_db
     from cosmic_ray.work_item import TestOutcome
 
     with use_db(str(WORK / f"{name}.sqlite"), WorkDB.Mode.open) as db:
-        survived = [
+        again = [
             item.job_id
             for item, result in db.completed_work_items
-            if result.test_outcome == TestOutcome.SURVIVED
+            if (outcome == "survived" and result.test_outcome == TestOutcome.SURVIVED)
+            or (outcome == "timeout" and result.output == "timeout")
         ]
         with db._session_maker.begin() as s:
-            s.query(WorkResultStorage).filter(WorkResultStorage.job_id.in_(survived)).delete()
+            s.query(WorkResultStorage).filter(WorkResultStorage.job_id.in_(again)).delete()
     resume(name)
 
 
@@ -401,6 +407,9 @@ def main() -> None:
     parser.add_argument(
         "--rerun-survivors", action="store_true", help="run only the kept sessions' survivors"
     )
+    parser.add_argument(
+        "--rerun-timeouts", action="store_true", help="run only the kept sessions' timeouts"
+    )
     args = parser.parse_args()
     if args.show:
         show(args.show)
@@ -413,8 +422,8 @@ def main() -> None:
         parser.error(f"unknown modules {sorted(unknown)}")
     if not args.report:
         for name in names:
-            if args.rerun_survivors:
-                rerun_survivors(name)
+            if args.rerun_survivors or args.rerun_timeouts:
+                rerun(name, "survived" if args.rerun_survivors else "timeout")
             elif args.resume:
                 resume(name)
             else:

@@ -98,3 +98,30 @@ def test_gravity_in_the_plane_adds_a_fall_across_the_chamber(tmp_path):
     assert fastest_relative_speed(vertical) == pytest.approx(
         fastest_relative_speed(flat) + math.sqrt(4 * 9.80665 * 0.2), rel=1e-12
     )
+
+
+# --- added by the mutation run (docs/testing.md) ------------------------------------------
+
+
+def test_hammer_effective_mass_of_free_and_welded_hammers(tmp_path):
+    """A free uniform plate struck at its corner offers M/(1 + Mρ²/I_C) = M/4 (ρ² = (L² + w²)/4,
+    I_C = M(L² + w²)/12; closed form, 1e-12 relative); a welded one the rotor's infinite
+    inertia."""
+    free = _case(tmp_path, "", ('mount = "hinged"', 'mount = "free"'))
+    assert hammer_effective_mass(free) == pytest.approx(free.hammers.mass / 4, rel=1e-12)
+    welded = _case(tmp_path, "", ('mount = "hinged"', 'mount = "welded"'))
+    assert math.isinf(hammer_effective_mass(welded))
+
+
+@pytest.mark.parametrize("zeta", [0.2, 0.37, 0.69, 0.9])
+def test_strong_damping_gets_twenty_steps_per_dashpot_time(zeta):
+    """steps_for_damping: 50 steps per contact, or 20 per dashpot time τ = t_c√(1 − ζ²)/(2πζ)
+    when those are more (ζ > 0.37); an independent statement of the rule (1e-12 relative)."""
+    from perga.case.timestep import steps_for_damping
+
+    steps = steps_for_damping(zeta, 50.0)
+    per_tau = steps * math.sqrt(1.0 - zeta**2) / (2.0 * math.pi * zeta)
+    if zeta < 0.37:
+        assert steps == 50.0
+    else:
+        assert per_tau == pytest.approx(20.0, rel=1e-12)
