@@ -82,6 +82,7 @@ EXCLUDED_OPERATORS = (
 _CHECK_INERTIA = (
     "if not (lower * (1.0 - _PARALLEL_AXIS_TOLERANCE) <= I_A < math.inf and I_A > 0.0):"
 )
+_LEDGER_DEFAULT = "an EnergyLedger default: its one maker, LedgerTerms.close, passes every field"
 EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("impact", 55, 53, "ReplaceComparisonOperator_LtE_Lt#0"): (
         _CHECK_INERTIA,
@@ -180,6 +181,46 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("contact", 317, 39, "NumberReplacer#151"): (
         "duration=float(sol.t_events[0][0]),",
         "the end event is terminal: one event, [0] is [-1]",
+    ),
+    ("records", 139, 21, "NumberReplacer#2"): (
+        "elastic: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 139, 21, "NumberReplacer#3"): (
+        "elastic: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 141, 29, "NumberReplacer#4"): (
+        "elastic_initial: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 141, 29, "NumberReplacer#5"): (
+        "elastic_initial: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 143, 20, "NumberReplacer#6"): (
+        "inflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 143, 20, "NumberReplacer#7"): (
+        "inflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 145, 21, "NumberReplacer#8"): (
+        "outflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 145, 21, "NumberReplacer#9"): (
+        "outflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 147, 30, "NumberReplacer#10"): (
+        "joint_correction: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 147, 30, "NumberReplacer#11"): (
+        "joint_correction: float = 0.0",
+        _LEDGER_DEFAULT,
     ),
 }
 """Surviving mutants that cannot change any result, keyed by (module, line, column, operator):
