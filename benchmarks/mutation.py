@@ -9,7 +9,7 @@ report counts killed, timed-out, survived and known-equivalent mutants (``EQUIVA
 score killed/(run − equivalent), timeouts counted as killed.
 
     pip install -e '.[test,mutation]'
-    python benchmarks/mutation.py                 # every module (about an hour on one core)
+    python benchmarks/mutation.py                 # every module (about 2 h on one core)
     python benchmarks/mutation.py impact contact  # some modules
     python benchmarks/mutation.py --report        # the report of the kept sessions only
     python benchmarks/mutation.py --show impact   # the surviving mutants' diffs
