@@ -323,3 +323,52 @@ def test_laws_are_frozen() -> None:
     law = LinearSpringDashpot(1e3, 0.1, 1.0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         law.k = 2e3  # type: ignore[misc]
+
+
+# --- added by the mutation run (docs/testing.md) ------------------------------------------
+
+
+def test_force_end_rejects_critical_damping() -> None:
+    """e = e^-2 exactly is the critically damped limit (ζ = 1) of end="force": outside
+    (e^-2, 1], so rejected, not handed to brentq (ln(e^-2) is -2.0 to the last bit)."""
+    for call in (damping_ratio, tsuji_alpha):
+        with pytest.raises(ValueError, match=re.escape("e must be in (exp(-2) = 0.135335, 1]")):
+            call(math.exp(-2.0), "force")
+
+
+def test_hertz_tsuji_rejects_a_non_positive_mass() -> None:
+    for m_eff in (0.0, -0.5):
+        with pytest.raises(
+            ValueError, match=re.escape(f"m_eff must be in (0, inf) kg (got {m_eff})")
+        ):
+            HertzTsuji(1e6, 0.1, m_eff)
+
+
+def test_contact_results_are_frozen() -> None:
+    """The laws and their results are values: assigning to a field raises."""
+    values = [
+        HertzTsuji(1e6, 0.1, 1e-3),
+        HertzTsuji(1e6, 0.1, 1e-3).impact(1.0),
+        time_step(1e-4, 1e-3, 0.0, 1.0),
+    ]
+    for value in values:
+        field = dataclasses.fields(value)[0].name
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(value, field, 2.0)
+
+
+def test_non_positive_durations_and_negative_damping_are_rejected() -> None:
+    for t_c in (0.0, -0.5):
+        with pytest.raises(ValueError, match=re.escape(f"t_c must be in (0, inf) s (got {t_c})")):
+            contact_time_step(t_c)
+    for zeta in (-0.1, 1.0, 1.5):  # no negative damping; ζ >= 1 is overdamped
+        with pytest.raises(ValueError, match=re.escape(f"zeta must be in [0, 1) (got {zeta})")):
+            LinearSpringDashpot(1e3, zeta, 1.0)
+
+
+def test_contact_bound_governs_a_tie() -> None:
+    """Equal bounds, 0.5·1 ms both (the same product in both, so equal to the bit): the
+    contact bound governs, as documented."""
+    step = time_step(1e-3, 1e-3, 0.0, 1.0, fraction=0.5)
+    assert step.contact == step.tunnelling == 5e-4
+    assert step.governed_by == "contact"

@@ -508,3 +508,118 @@ def test_paper_energy_change() -> None:
     assert paper_energy_change(2.0, 3.0, -1.0) == pytest.approx(8.0, rel=REL)
     with pytest.raises(ValueError, match=re.escape("v0 and v1 must be finite vectors")):
         paper_energy_change(1.0, (1.0, 2.0), (1.0, 2.0, 3.0))
+
+
+# --- added by the mutation run (docs/testing.md) ------------------------------------------
+
+
+def test_centre_of_percussion_rejects_a_bad_lever_arm() -> None:
+    """l_cg must be finite and > 0: q = I_A/(M·l_cg) has no meaning otherwise."""
+    for l_cg in (0.0, -0.05, math.inf):
+        with pytest.raises(
+            ValueError, match=re.escape(f"l_cg must be finite and > 0 m (got {l_cg})")
+        ):
+            centre_of_percussion(0.3, 1e-3, l_cg)
+
+
+def test_infinite_moments_and_frictions_are_rejected() -> None:
+    with pytest.raises(ValueError, match=re.escape("I_A must be finite and > 0 kg·m² (got inf)")):
+        hinged_effective_mass(math.inf, 0.1)
+    with pytest.raises(ValueError, match=re.escape("I_A must be in [M·l_cg², inf)")):
+        centre_of_percussion(0.3, math.inf, 0.05)
+    with pytest.raises(ValueError, match=re.escape("f must be finite and >= 0 (got inf)")):
+        oblique_impact(0.01, 0.005, -1.0, 0.5, 0.5, math.inf)
+
+
+def test_point_mass_hammer_has_no_rotational_energy() -> None:
+    """A hammer whose mass sits at its centre of mass (I_A = M·l² less a round-off the
+    parallel-axis check allows) holds ½M(Ωl)² and no rotational energy: I_c = I_A − M·l² is
+    clamped at 0, never negative. 1e-15 relative: a few round-offs, while an I_c of −1e-13·M·l²
+    would show at 1e-13."""
+    M, L, Omega = 0.2, 0.1, 150.0
+    res = hinged_impact(
+        M=M, I_A=M * L**2 * (1.0 - 1e-13), r_c=(L, 0.0), r_k=(0.08, 0.0), n=(0.0, 1.0),
+        Omega=Omega, v_A=(0.0, 0.0), m=0.003, v_g=(0.0, 0.0), e=0.5,
+    )  # fmt: skip
+    assert res.hammer_energy_before == pytest.approx(0.5 * M * (Omega * L) ** 2, rel=1e-15)
+
+
+def test_oblique_impact_of_a_point_granule() -> None:
+    """shape 'point' takes r = 0: no spin, the slip is v_t, and against an immovable surface the
+    tangential impulse is −sgn(v_t)·min(f·J_n, m|v_t|) (closed form, 1e-12 relative)."""
+    m, v_n, v_t, e = 0.002, -3.0, 0.4, 0.5
+    J_n = m * (1 + e) * 3.0
+    for f, J_t in ((0.05, -0.05 * J_n), (1.0, -m * v_t)):
+        res = oblique_impact(m, 0.0, v_n, v_t, e, f, shape="point")
+        assert res.tangential_impulse == pytest.approx(J_t, rel=REL)
+        assert res.tangential_velocity == pytest.approx(v_t + J_t / m, rel=REL, abs=1e-15)
+        assert res.spin == 0.0
+
+
+def test_oblique_impact_without_approach_does_not_stick() -> None:
+    """No impact (v_n >= 0) is no sticking either, even with no slip to stop."""
+    res = oblique_impact(0.01, 0.005, 0.5, 2.0, 0.5, 0.5, shape="disc", omega_g=-400.0)
+    assert res.slip_before == 0.0
+    assert res.normal_impulse == 0.0
+    assert not res.sticks
+
+
+@pytest.mark.parametrize(("f", "sticks"), [(0.5, True), (0.05, False)])
+def test_oblique_impact_dissipation_against_movable_surface(f: float, sticks: bool) -> None:
+    """Finite M_n, M_t: the energy lost is ½μ_n(1 − e²)v_n² (normal) plus the friction's
+    work over the slip, which falls linearly with the tangential impulse P at the rate C_t =
+    1/m + r²/I + 1/M_t: |J_t|·|s| − ½C_t·J_t² (½s²/C_t when the slip is stopped). Closed
+    form, independent of the code's energy bookkeeping; 1e-12 relative (round-off)."""
+    m, r, v_n, v_t, e, M_n, M_t = 0.002, 0.003, -4.0, 1.5, 0.6, 0.05, 0.02
+    res = oblique_impact(m, r, v_n, v_t, e, f, shape="disc", omega_g=100.0, M_n=M_n, M_t=M_t)
+    assert res.sticks is sticks
+    s = v_t + r * 100.0
+    mu_n = m * M_n / (m + M_n)
+    C_t = 1.0 / m + r**2 / (0.5 * m * r**2) + 1.0 / M_t
+    J_t = abs(res.tangential_impulse)
+    expected_J_t = abs(s) / C_t if sticks else f * mu_n * (1 + e) * abs(v_n)
+    assert J_t == pytest.approx(expected_J_t, rel=REL)
+    tangential = J_t * abs(s) - 0.5 * C_t * J_t**2
+    expected = 0.5 * mu_n * (1 - e**2) * v_n**2 + tangential
+    assert res.dissipated == pytest.approx(expected, rel=REL)
+
+
+def test_oblique_impact_rejects_an_infinite_or_negative_radius() -> None:
+    with pytest.raises(ValueError, match=re.escape("r must be finite and > 0 m for shape 'disc'")):
+        oblique_impact(0.01, math.inf, -1.0, 0.5, 0.5, 0.3)
+    with pytest.raises(
+        ValueError, match=re.escape("r must be finite and >= 0 m for shape 'point'")
+    ):
+        oblique_impact(0.01, -0.5, -1.0, 0.5, 0.5, 0.3, shape="point")
+
+
+def test_paper_energy_change_rejects_a_non_finite_velocity() -> None:
+    for v0, v1 in (((1.0, math.nan), (1.0, 2.0)), ((1.0, 2.0), (math.inf, 2.0))):
+        with pytest.raises(ValueError, match=re.escape("v0 and v1 must be finite vectors")):
+            paper_energy_change(1.0, v0, v1)
+
+
+def test_impact_results_are_frozen() -> None:
+    """The results are values: assigning to a field raises."""
+    from dataclasses import FrozenInstanceError
+
+    results = [
+        normal_impact(0.01, 1.0, 0.0, 1.0, 0.5),
+        oblique_impact(0.01, 0.005, -1.0, 0.5, 0.5, 0.3),
+        impact_efficiencies(0.01, 1.0, 0.5),
+        hinged_impact(
+            M=0.2,
+            I_A=1e-3,
+            r_c=(0.05, 0.0),
+            r_k=(0.08, 0.0),
+            n=(0.0, 1.0),
+            Omega=100.0,
+            v_A=(0.0, 0.0),
+            m=0.003,
+            v_g=(0.0, 0.0),
+            e=0.5,
+        ),
+    ]
+    for result in results:
+        with pytest.raises(FrozenInstanceError):
+            result.dissipated = 0.0  # type: ignore[misc]

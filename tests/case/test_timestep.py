@@ -14,6 +14,7 @@ from perga.case.timestep import (
     hammer_effective_mass,
     normal_stiffness,
     step_plan,
+    steps_for_damping,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -149,3 +150,28 @@ def test_the_rotation_and_contact_checks_on_both_sides_of_their_limits(
         return
     with pytest.raises(CaseError, match=message):
         load_case(path, overrides=[dt])
+
+
+# --- added by the mutation run (docs/testing.md) ------------------------------------------
+
+
+def test_hammer_effective_mass_of_free_and_welded_hammers(tmp_path):
+    """A free uniform plate struck at its corner offers M/(1 + Mρ²/I_C) = M/4 (ρ² = (L² + w²)/4,
+    I_C = M(L² + w²)/12; closed form, 1e-12 relative); a welded one the rotor's infinite
+    inertia."""
+    free = _case(tmp_path, "", ('mount = "hinged"', 'mount = "free"'))
+    assert hammer_effective_mass(free) == pytest.approx(free.hammers.mass / 4, rel=1e-12)
+    welded = _case(tmp_path, "", ('mount = "hinged"', 'mount = "welded"'))
+    assert math.isinf(hammer_effective_mass(welded))
+
+
+@pytest.mark.parametrize("zeta", [0.2, 0.37, 0.69, 0.9])
+def test_strong_damping_gets_twenty_steps_per_dashpot_time(zeta):
+    """steps_for_damping: 50 steps per contact, or 20 per dashpot time τ = t_c√(1 − ζ²)/(2πζ)
+    when those are more (ζ > 0.37); an independent statement of the rule (1e-12 relative)."""
+    steps = steps_for_damping(zeta, 50.0)
+    per_tau = steps * math.sqrt(1.0 - zeta**2) / (2.0 * math.pi * zeta)
+    if zeta < 0.37:
+        assert steps == 50.0
+    else:
+        assert per_tau == pytest.approx(20.0, rel=1e-12)

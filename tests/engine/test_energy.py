@@ -234,3 +234,53 @@ def test_drive_work_while_the_rotor_speed_changes() -> None:
     assert w_b - w_a == pytest.approx(torque * (t_b - t_a) / moment, rel=1e-9)
     assert work_b - work_a == pytest.approx(0.5 * moment * (w_b**2 - w_a**2), rel=1e-9)
     assert abs(sim.energy().closure) < 1e-9
+
+
+# --- added by the mutation run (docs/testing.md) ------------------------------------------
+
+
+def test_the_residual_books_every_term_with_its_sign() -> None:
+    """LedgerTerms.close with every term set to a distinct power of two (sums exact): residual
+    = drive + gravity + joint + inflow − outflow − ΔKE − Δelastic − contact − friction − drag,
+    written out by hand; the energy in play is the granules' kinetic + elastic energy now,
+    the largest term here. Exact arithmetic: 1e-15 relative."""
+    machine = LedgerTerms(
+        kinetic=64.0, kinetic_initial=64.0, drive_work=2.0, gravity_work=4.0,
+        contact_dissipation=0.5, friction=0.25, drag=0.125, inflow=8.0, outflow=1.0,
+        joint_correction=0.0625,
+    )  # fmt: skip
+    granules = LedgerTerms(kinetic=16.0, kinetic_initial=1.0, elastic=32.0, elastic_initial=0.0)
+    ledger = (machine + granules).close(granules)
+    change = (64.0 + 16.0 - 64.0 - 1.0) + (32.0 - 0.0)
+    residual = 2.0 + 4.0 + 0.0625 + 8.0 - 1.0 - change - 0.5 - 0.25 - 0.125
+    assert ledger.residual == pytest.approx(residual, rel=1e-15)
+    assert ledger.energy_in_play == pytest.approx(16.0 + 32.0, rel=1e-15)
+    assert ledger.closure == pytest.approx(residual / 48.0, rel=1e-15)
+
+
+def test_nothing_moving_closes_at_zero() -> None:
+    """An empty part has every term 0, and a ledger where nothing moves closes at 0 (the energy
+    in play has a positive floor, so the ratio is defined)."""
+    from dataclasses import fields
+
+    empty = LedgerTerms()
+    assert all(getattr(empty, f.name) == 0.0 for f in fields(empty))
+    ledger = empty.close(empty)
+    assert ledger.energy_in_play > 0.0
+    assert ledger.closure == 0.0
+
+
+def test_records_are_frozen() -> None:
+    """The records are values: assigning to a field raises."""
+    from dataclasses import MISSING, FrozenInstanceError, fields
+
+    from perga.model import records
+
+    for cls in (
+        records.HammerState, records.Impact, records.Release, records.Departure, records.Events,
+        records.EnergyLedger, records.LedgerTerms,
+    ):  # fmt: skip
+        required = {f.name: 0 for f in fields(cls) if f.default is MISSING}
+        value = cls(**required)
+        with pytest.raises(FrozenInstanceError):
+            setattr(value, fields(cls)[0].name, 1)

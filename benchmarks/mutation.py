@@ -1,0 +1,476 @@
+"""Mutation testing of perga's pure-Python physics with cosmic-ray (docs/testing.md).
+
+Each module of ``MODULES`` is mutated by cosmic-ray (one mutant at a time, the file rewritten in
+place and restored, the module's fast tests run in a fresh process, sequentially on one core),
+with the operator set of ``EXCLUDED_OPERATORS`` and numba's JIT off (``NUMBA_DISABLE_JIT=1``:
+a jitted law is then plain Python, so every mutant is seen by every caller, with no stale numba
+cache of an inlining caller). Sessions are kept in ``build/mutation/`` (git-ignored); the
+report counts killed, timed-out, survived and known-equivalent mutants (``EQUIVALENT``) and the
+score killed/(run − equivalent), timeouts counted as killed.
+
+    pip install -e '.[test,mutation]'
+    python benchmarks/mutation.py                 # every module (about 2 h on one core)
+    python benchmarks/mutation.py impact contact  # some modules
+    python benchmarks/mutation.py --report        # the report of the kept sessions only
+    python benchmarks/mutation.py --show impact   # the surviving mutants' diffs
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+WORK = ROOT / "build" / "mutation"
+TIMEOUT = 30.0
+"""Seconds a mutant's tests may run (each module's tests take 2-6 s unmutated; a mutant of the
+Hertz-Tsuji integration can integrate for ever)."""
+
+
+@dataclass(frozen=True)
+class Module:
+    """A source file to mutate and the test files that cover it (paths from the repo root)."""
+
+    source: str
+    tests: tuple[str, ...]
+    timeout: float = TIMEOUT
+    """Seconds a mutant's tests may run."""
+
+
+MODULES = {
+    "impact": Module("src/perga/analytic/impact.py", ("tests/analytic/test_impact.py",)),
+    # 10 s, 3x the unmutated run: many mutants of the Hertz-Tsuji integration never end
+    "contact": Module("src/perga/analytic/contact.py", ("tests/analytic/test_contact.py",), 10.0),
+    "laws": Module(
+        "src/perga/contact/soft/laws.py",
+        ("tests/contact/soft/test_restitution.py", "tests/contact/soft/test_chung_ooi.py"),
+    ),
+    "timestep": Module(
+        "src/perga/case/timestep.py",
+        (
+            "tests/case/test_timestep.py",
+            "tests/case/test_pair_stiffness.py",
+            "tests/case/test_materials.py",
+        ),
+    ),
+    "records": Module("src/perga/model/records.py", ("tests/engine/test_energy.py",)),
+    "energy": Module("src/perga/engine/energy.py", ("tests/engine/test_energy.py",)),
+}
+
+# Operators (cosmic-ray's names, regexes matched at the start): the arithmetic operator replaced
+# by its inverse (+ ↔ −, × ↔ ÷) and ** by ×, comparisons moved across their boundary (< ↔ <=,
+# > ↔ >=, == ↔ !=, is ↔ is not), and all of cosmic-ray's other operators (numbers ±1, not
+# added or removed, True/False, and/or, unary signs, exceptions, loops). Left out: the other
+# arithmetic pairs and the integer/bitwise operators (//, %, <<, >>, |, &, ^: on floats they
+# raise TypeError or repeat an inverse; the only |, & here are in annotations), comparisons
+# turned into identity tests, and RemoveDecorator (removing @njit leaves the same function).
+_KEPT_BINARY = "Add_Sub|Sub_Add|Mul_Div|Div_Mul|Pow_Mul"
+_KEPT_COMPARISON = "Lt_LtE|LtE_Lt|Gt_GtE|GtE_Gt|Eq_NotEq|NotEq_Eq|Is_IsNot|IsNot_Is"
+EXCLUDED_OPERATORS = (
+    rf"core/ReplaceBinaryOperator_(?!(?:{_KEPT_BINARY})$)",
+    rf"core/ReplaceComparisonOperator_(?!(?:{_KEPT_COMPARISON})$)",
+    r"core/RemoveDecorator",
+)
+
+_CHECK_INERTIA = (
+    "if not (lower * (1.0 - _PARALLEL_AXIS_TOLERANCE) <= I_A < math.inf and I_A > 0.0):"
+)
+_LEDGER_DEFAULT = "an EnergyLedger default: its one maker, LedgerTerms.close, passes every field"
+EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
+    ("impact", 55, 53, "ReplaceComparisonOperator_LtE_Lt#0"): (
+        _CHECK_INERTIA,
+        "differs only at I_A = M·r²·(1 − 1e-12) to the last bit, the edge of a round-off allowance",
+    ),
+    ("impact", 55, 79, "ReplaceComparisonOperator_Gt_GtE#1"): (
+        _CHECK_INERTIA,
+        "I_A = 0 passes only with r_c = 0 (hinged_impact), and hinged_effective_mass then "
+        "rejects it: ValueError either way",
+    ),
+    ("impact", 55, 81, "NumberReplacer#15"): (
+        _CHECK_INERTIA,
+        "I_A > -1: a negative I_A already fails M·r² <= I_A; I_A = 0 as for the >= mutant",
+    ),
+    ("impact", 146, 52, "ReplaceComparisonOperator_Gt_GtE#2"): (
+        "impulse = mu * (1.0 + e) * approach if approach > 0.0 else 0.0",
+        "at approach = 0 both branches give a zero impulse",
+    ),
+    ("impact", 259, 23, "ReplaceComparisonOperator_Gt_GtE#5"): (
+        "if abs(norm - 1.0) > _UNIT_NORMAL_TOLERANCE:",
+        "differs only at | |n| − 1 | = 1e-9 exactly, the edge of a round-off allowance",
+    ),
+    ("contact", 67, 4, "ReplaceBinaryOperator_Mul_Div#3"): (
+        "*,",
+        "_check_in's keyword-only marker made positional-only: every call passes name … high "
+        "by position and the flags by keyword, accepted either way",
+    ),
+    ("contact", 290, 25, "NumberReplacer#109"): (
+        "return max(y[0], 0.0) ** 1.25 + alpha * y[1]",
+        "the force-end event is terminal and F returns to 0 while u > 0 (α > 0): it never sees "
+        "u < 0",
+    ),
+    ("contact", 296, 26, "NumberReplacer#119"): (
+        "u, du = max(y[0], 0.0), y[1]",
+        "u < 0 only at the step ending the contact, after the force peak; the first peak event "
+        "is the one taken",
+    ),
+    ("contact", 308, 13, "NumberReplacer#137"): (
+        "rtol=1e-12,",
+        "scipy raises an rtol below 100 eps to 100 eps (with a warning): a tighter integration, "
+        "results change below its 1e-9 accuracy",
+    ),
+    ("contact", 319, 48, "NumberReplacer#155"): (
+        "peak_overlap_time=float(sol.t_events[1][0]),",
+        "the overlap has one maximum per contact: one event, [0] is [-1]",
+    ),
+    ("contact", 314, 59, "NumberReplacer#145"): (
+        "u_force, du_force = (float(x) for x in sol.y_events[2][0])",
+        "the force has one maximum per contact (after it, a minimum at most): one event, [0] "
+        "is [-1]",
+    ),
+    ("contact", 398, 78, "ReplaceTrueWithFalse#11"): (
+        "compliance = sum((1.0 - nu_i**2) / E_i for E_i, nu_i in zip(E, nu, strict=True))",
+        "the loop just above zips E and nu strictly and raises first on unequal lengths",
+    ),
+    ("contact", 316, 11, "NumberReplacer#146"): (
+        "v0=1.0,",
+        "the dimensionless response's v0 is never read: HertzTsuji.impact sets its own",
+    ),
+    ("contact", 264, 19, "NumberReplacer#72"): (
+        "@lru_cache(maxsize=512)",
+        "the cache's capacity, not its values",
+    ),
+    ("contact", 264, 19, "NumberReplacer#73"): (
+        "@lru_cache(maxsize=512)",
+        "the cache's capacity, not its values",
+    ),
+    ("contact", 278, 30, "NumberReplacer#86"): (
+        "return ImpactResponse(1.0, 2.0 * half, u_max, half, u_max**1.5, half)",
+        "the dimensionless response's v0 is never read: HertzTsuji.impact sets its own",
+    ),
+    ("contact", 278, 30, "NumberReplacer#87"): (
+        "return ImpactResponse(1.0, 2.0 * half, u_max, half, u_max**1.5, half)",
+        "the dimensionless response's v0 is never read: HertzTsuji.impact sets its own",
+    ),
+    ("contact", 321, 46, "NumberReplacer#159"): (
+        "peak_force_time=float(sol.t_events[2][0]),",
+        "the force has one maximum per contact: one event, [0] is [-1]",
+    ),
+    ("contact", 58, 38, "NumberReplacer#17"): (
+        "_ZETA_BELOW_ONE = math.nextafter(1.0, 0.0)",
+        "nextafter(1, -1) is nextafter(1, 0): the same double",
+    ),
+    ("contact", 302, 27, "NumberReplacer#128"): (
+        "event.direction = -1.0",
+        "scipy reads only the sign of an event's direction",
+    ),
+    ("contact", 395, 54, "ReplaceTrueWithFalse#8"): (
+        "for i, (E_i, nu_i) in enumerate(zip(E, nu, strict=True)):",
+        "the sum just below zips E and nu strictly: unequal lengths still raise",
+    ),
+    ("contact", 316, 11, "NumberReplacer#147"): (
+        "v0=1.0,",
+        "the dimensionless response's v0 is never read: HertzTsuji.impact sets its own",
+    ),
+    ("contact", 317, 39, "NumberReplacer#151"): (
+        "duration=float(sol.t_events[0][0]),",
+        "the end event is terminal: one event, [0] is [-1]",
+    ),
+    ("records", 139, 21, "NumberReplacer#2"): (
+        "elastic: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 139, 21, "NumberReplacer#3"): (
+        "elastic: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 141, 29, "NumberReplacer#4"): (
+        "elastic_initial: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 141, 29, "NumberReplacer#5"): (
+        "elastic_initial: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 143, 20, "NumberReplacer#6"): (
+        "inflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 143, 20, "NumberReplacer#7"): (
+        "inflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 145, 21, "NumberReplacer#8"): (
+        "outflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 145, 21, "NumberReplacer#9"): (
+        "outflow: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 147, 30, "NumberReplacer#10"): (
+        "joint_correction: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+    ("records", 147, 30, "NumberReplacer#11"): (
+        "joint_correction: float = 0.0",
+        _LEDGER_DEFAULT,
+    ),
+}
+"""Surviving mutants that cannot change any result, keyed by (module, line, column, operator):
+(the source line's text, stripped, to catch a stale entry; why it is equivalent)."""
+
+
+def _config(name: str, module: Module) -> Path:
+    tests = " ".join(module.tests)
+    command = f"{sys.executable} -m pytest -p no:cacheprovider -q -x --hypothesis-seed=0 {tests}"
+    excluded = ", ".join(json.dumps(e) for e in EXCLUDED_OPERATORS)
+    path = WORK / f"{name}.toml"
+    path.write_text(
+        "[cosmic-ray]\n"
+        f'module-path = "{module.source}"\n'
+        f"timeout = {module.timeout}\n"
+        "excluded-modules = []\n"
+        f"test-command = {json.dumps(command)}\n"
+        "[cosmic-ray.distributor]\n"
+        'name = "local"\n'
+        "[cosmic-ray.filters.operators-filter]\n"
+        f"exclude-operators = [{excluded}]\n"
+    )
+    return path
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT)])
+    env["NUMBA_DISABLE_JIT"] = "1"
+    return env
+
+
+def run(name: str) -> None:
+    """Create a fresh session for module ``name`` and execute every mutant of it."""
+    WORK.mkdir(parents=True, exist_ok=True)
+    config, session = _config(name, MODULES[name]), WORK / f"{name}.sqlite"
+    session.unlink(missing_ok=True)
+    bindir = Path(sys.executable).parent
+    for cmd in (
+        [bindir / "cosmic-ray", "init", config, session],
+        [bindir / "cr-filter-operators", session, config],
+        [bindir / "cosmic-ray", "exec", config, session],
+    ):
+        subprocess.run([str(c) for c in cmd], cwd=ROOT, env=_env(), check=True)
+
+
+def resume(name: str) -> None:
+    """Execute the pending mutants of the kept session of module ``name``."""
+    bindir = Path(sys.executable).parent
+    config, session = _config(name, MODULES[name]), WORK / f"{name}.sqlite"
+    subprocess.run(
+        [str(bindir / "cosmic-ray"), "exec", str(config), str(session)],
+        cwd=ROOT,
+        env=_env(),
+        check=True,
+    )
+
+
+def rerun(name: str, outcome: str) -> None:
+    """Run again the mutants of ``name`` that survived (``outcome`` "survived": after tests were
+    added, a mutant the unchanged old tests killed stays killed) or timed out ("timeout": with
+    a longer ``timeout`` in ``MODULES``)."""
+    from cosmic_ray.work_db import WorkDB, WorkResultStorage, use_db
+    from cosmic_ray.work_item import TestOutcome
+
+    with use_db(str(WORK / f"{name}.sqlite"), WorkDB.Mode.open) as db:
+        again = [
+            item.job_id
+            for item, result in db.completed_work_items
+            if (outcome == "survived" and result.test_outcome == TestOutcome.SURVIVED)
+            or (outcome == "timeout" and result.output == "timeout")
+        ]
+        with db._session_maker.begin() as s:
+            s.query(WorkResultStorage).filter(WorkResultStorage.job_id.in_(again)).delete()
+    resume(name)
+
+
+def check(name: str, where: str, tests: list[str]) -> bool:
+    """Whether ``tests`` (pytest node ids) pass unmutated and fail with the mutant ``where`` of
+    module ``name`` (``LINE:COLUMN:OPERATOR#OCCURRENCE`` as the report prints it) applied to a
+    temporary copy of ``src/`` (the kept session and the work tree are left alone)."""
+    import cosmic_ray.plugins
+    from cosmic_ray.mutating import apply_mutation
+    from cosmic_ray.work_db import WorkDB, use_db
+
+    line, column, operator = where.split(":", 2)
+    operator, occurrence = operator.split("#")
+    with use_db(str(WORK / f"{name}.sqlite"), WorkDB.Mode.open) as db:
+        (mutation,) = [
+            m
+            for item in db.work_items
+            for m in item.mutations
+            if m.start_pos == (int(line), int(column))
+            and m.operator_name == f"core/{operator}"
+            and m.occurrence == int(occurrence)
+        ]
+    command = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", *tests]
+    outcomes = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for mutate in (False, True):  # src/ as committed (a session may be mutating the tree's)
+            tree = Path(tmp) / str(mutate)
+            tree.mkdir()
+            archive = subprocess.run(
+                ["git", "archive", "HEAD", "src"], cwd=ROOT, capture_output=True, check=True
+            ).stdout
+            subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
+            if mutate:
+                operator_class = cosmic_ray.plugins.get_operator(mutation.operator_name)
+                apply_mutation(tree / MODULES[name].source, operator_class(), mutation.occurrence)
+            env = _env() | {"PYTHONPATH": os.pathsep.join([str(tree / "src"), str(ROOT)])}
+            outcomes.append(subprocess.run(command, cwd=ROOT, env=env, capture_output=True))
+    passed, failed = (o.returncode for o in outcomes)
+    print(
+        f"{name}:{where}: unmutated {'pass' if passed == 0 else 'FAIL'}, "
+        f"mutant {'killed' if failed else 'NOT KILLED'}"
+    )
+    return passed == 0 and failed != 0
+
+
+@dataclass(frozen=True)
+class Mutant:
+    """One executed mutant: where, which operator, and what became of it."""
+
+    module: str
+    line: int
+    column: int
+    operator: str
+    outcome: str  # killed, timeout, survived, equivalent, incompetent
+    text: str
+
+    @property
+    def key(self) -> tuple[str, int, int, str]:
+        return (self.module, self.line, self.column, self.operator)
+
+
+def mutants(name: str) -> list[Mutant]:
+    """The executed mutants of a module's kept session (filtered ones left out)."""
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import TestOutcome, WorkerOutcome
+
+    source = MODULES[name].source  # as committed: a session may be mutating the tree's
+    lines = subprocess.run(
+        ["git", "show", f"HEAD:{source}"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.splitlines()
+    out = []
+    with use_db(str(WORK / f"{name}.sqlite"), WorkDB.Mode.open) as db:
+        for item, result in db.completed_work_items:
+            if result.worker_outcome == WorkerOutcome.SKIPPED:
+                continue
+            (mutation,) = item.mutations
+            line, col = mutation.start_pos
+            operator = mutation.operator_name.removeprefix("core/")
+            if result.worker_outcome != WorkerOutcome.NORMAL:
+                outcome = "incompetent"
+            elif result.test_outcome == TestOutcome.SURVIVED:
+                outcome = "survived"
+            elif result.output == "timeout":
+                outcome = "timeout"
+            else:
+                outcome = "killed"
+            text = lines[line - 1].strip()
+            m = Mutant(name, line, col, f"{operator}#{mutation.occurrence}", outcome, text)
+            if outcome == "survived" and m.key in EQUIVALENT:
+                outcome = "equivalent"
+                if EQUIVALENT[m.key][0] != text:
+                    print(f"stale EQUIVALENT entry {m.key}: {text!r}", file=sys.stderr)
+            out.append(Mutant(name, line, col, m.operator, outcome, text))
+    return out
+
+
+def report(names: list[str]) -> None:
+    """Counts and score per module, and every unexplained survivor."""
+    header = "| module | mutants | killed | timeouts | survived | equivalent | score |"
+    print(header + "\n|" + "---|" * 7)
+    for name in names:
+        if not (WORK / f"{name}.sqlite").exists():
+            continue
+        ms = mutants(name)
+        count = {k: sum(m.outcome == k for m in ms) for k in ("killed", "timeout", "survived")}
+        equivalent = sum(m.outcome == "equivalent" for m in ms)
+        incompetent = sum(m.outcome == "incompetent" for m in ms)
+        caught = count["killed"] + count["timeout"]
+        score = caught / max(len(ms) - equivalent - incompetent, 1)
+        print(
+            f"| {MODULES[name].source.removeprefix('src/')} | {len(ms)} | {count['killed']} "
+            f"| {count['timeout']} | {count['survived']} | {equivalent} | {100 * score:.1f} % |"
+        )
+        if incompetent:
+            print(f"  ({incompetent} incompetent mutants of {name} not counted)")
+    for name in names:
+        if (WORK / f"{name}.sqlite").exists():
+            for m in mutants(name):
+                if m.outcome == "survived":
+                    print(f"SURVIVED {name}:{m.line}:{m.column} {m.operator}  {m.text}")
+
+
+def show(name: str) -> None:
+    """Print the diff of every survivor of a module (cosmic-ray's own report)."""
+    bindir = Path(sys.executable).parent
+    out = subprocess.run(
+        [str(bindir / "cr-report"), "--show-output", str(WORK / f"{name}.sqlite")],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    for block in re.split(r"\n(?=\[job-id\])", out):
+        if "test outcome: TestOutcome.SURVIVED" in block:
+            print(block.split("test outcome")[0] + block.split("diff:")[-1][:2000])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("modules", nargs="*", help=f"some of {', '.join(MODULES)} (all)")
+    parser.add_argument("--report", action="store_true", help="only report the kept sessions")
+    parser.add_argument("--show", metavar="MODULE", help="diffs of a module's survivors")
+    parser.add_argument(
+        "--check",
+        nargs="+",
+        metavar="ARG",
+        help="MODULE LINE:COLUMN:OPERATOR#OCCURRENCE TEST...: tests pass, and fail on the mutant",
+    )
+    parser.add_argument(
+        "--resume", action="store_true", help="run only the kept sessions' pending mutants"
+    )
+    parser.add_argument(
+        "--rerun-survivors", action="store_true", help="run only the kept sessions' survivors"
+    )
+    parser.add_argument(
+        "--rerun-timeouts", action="store_true", help="run only the kept sessions' timeouts"
+    )
+    args = parser.parse_args()
+    if args.show:
+        show(args.show)
+        return
+    if args.check:
+        sys.exit(0 if check(args.check[0], args.check[1], args.check[2:]) else 1)
+    names = args.modules or list(MODULES)
+    unknown = set(names) - set(MODULES)
+    if unknown:
+        parser.error(f"unknown modules {sorted(unknown)}")
+    if not args.report:
+        for name in names:
+            if args.rerun_survivors or args.rerun_timeouts:
+                rerun(name, "survived" if args.rerun_survivors else "timeout")
+            elif args.resume:
+                resume(name)
+            else:
+                run(name)
+    report(names)
+
+
+if __name__ == "__main__":
+    main()
