@@ -155,7 +155,9 @@ def test_a_material_without_moduli_is_named(tmp_path: Path) -> None:
 
 def test_the_run_summary_states_each_contact(tmp_path: Path) -> None:
     """summary.json's contacts: per contact kind the pair's k_n ((4/3)E*, Pa, as above), Tsuji's
-    α for e = 0.7 ending at zero force, the convention named, t_c and t_c over the step."""
+    α for e = 0.7 ending at zero force, the convention named, t_c and t_c over the step, and
+    the tangential half-period over the step; the shorter of the two is 50 steps (Mindlin's
+    k_t, 1.18 k_n here, oscillates faster than the normal contact: it sets the step)."""
     from perga.analytic.contact import tsuji_alpha
     from perga.cli import main
 
@@ -173,7 +175,14 @@ def test_the_run_summary_states_each_contact(tmp_path: Path) -> None:
         assert c["damping"] == pytest.approx(tsuji_alpha(0.7, "force"), rel=1e-15)
         assert "Schwager & Pöschel" in c["convention"]
         assert c["steps_per_contact"] == pytest.approx(c["duration"] / summary["dt"], rel=1e-12)
-    assert min(c["steps_per_contact"] for c in contacts.values()) == pytest.approx(50.0)
+        half = c["tangential_half_period"]
+        assert c["steps_per_tangential_half_period"] == pytest.approx(half / summary["dt"])
+    fewest = min(
+        min(c["steps_per_contact"], c["steps_per_tangential_half_period"])
+        for c in contacts.values()
+    )
+    assert fewest == pytest.approx(50.0)
+    assert min(c["steps_per_contact"] for c in contacts.values()) > 80.0
 
 
 def test_hertz_by_duration_lasts_that_long_at_the_fastest_speed(tmp_path: Path) -> None:

@@ -473,3 +473,14 @@ def time_step(
         contact=contact_time_step(t_c, fraction),
         tunnelling=tunnelling_time_step(radius, thickness, v_rel_max),
     )
+
+
+def mindlin_ratio(E: tuple[float, float], nu: tuple[float, float]) -> float:
+    """Mindlin's tangential over Hertz's secant normal stiffness, k_t/k_n = 6G*/E*, of two
+    materials: the ratio on perga's Hertz k_n√(R*δ), whose k_t = 8G*√(R*δ) (Mindlin 1949;
+    Johnson, Contact Mechanics (1985) §7.2), 1/G* = (2 − ν1)/G1 + (2 − ν2)/G2, G = E/(2(1 + ν)),
+    E* as ``effective_modulus``. For one material (or one on a rigid body) 3(1 − ν)/(2 − ν):
+    1 at ν = 0.5, 1.5 at ν = 0, → 2 as ν → −1; two materials weight theirs by (1 − ν²)/E.
+    """
+    shear = sum(2.0 * (2.0 - n) * (1.0 + n) / e for e, n in zip(E, nu, strict=True))
+    return 6.0 / (effective_modulus(E, nu) * shear)

@@ -306,7 +306,7 @@ def _contact_model(case: Case) -> list[str]:
             "I = m r²/2; sliding points need contact_model.kind = 'rigid')"
         )
     if cm.kind == "hertz":
-        problems += _hertz_moduli(case)
+        problems += _hertz_moduli(case) + _mindlin_moduli(case)
     else:
         problems += [
             f"materials.{name}.youngs_modulus: sets Hertz stiffness; a linear contact takes "
@@ -357,6 +357,32 @@ def _hertz_moduli(case: Case) -> list[str]:
     return problems
 
 
+def _mindlin_moduli(case: Case) -> list[str]:
+    """contact_model.tangential_ratio = 'mindlin' takes each pair's k_t/k_n from both materials'
+    Young's modulus and Poisson's ratio: it needs them, and so the stiffness from them too."""
+    cm = case.contact_model
+    if cm.tangential_ratio != "mindlin":
+        return []
+    shared = "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""
+    if shared:
+        return [
+            f"contact_model.tangential_ratio: 'mindlin' takes k_t/k_n from the materials' "
+            f"youngs_modulus and poisson_ratio, which contact_model.{shared} excludes; give a "
+            "number (3(1 − ν)/(2 − ν) for one material on a rigid body)"
+        ]
+    used = sorted({m for c in case.contacts for m in c.pair if m in case.materials})
+    problems = []
+    for m in used:
+        missing = [k for k in ("youngs_modulus", "poisson_ratio")
+                   if getattr(case.materials[m], k) is None]  # fmt: skip
+        if missing:
+            problems.append(
+                f"materials.{m}: contact_model.tangential_ratio = 'mindlin' needs "
+                f"{' and '.join(missing)} (Pa; -) of every material in [[contacts]]"
+            )
+    return problems
+
+
 def _time_step(case: Case) -> list[str]:
     if case.chamber is None or case.granules.placement is None:
         return []
@@ -379,14 +405,18 @@ def _time_step(case: Case) -> list[str]:
             f"{MAX_ROTATION_PER_STEP} rad, i.e. a step <= "
             f"{MAX_ROTATION_PER_STEP / case.rotor.angular_velocity:.3g} s"
         )
-    steps = plan.contact_duration / plan.granule
-    if steps < MIN_STEPS_PER_CONTACT:
-        problems.append(
-            f"solver.dt: {plan.granule:g} s resolves the shortest contact (t_c = "
-            f"{plan.contact_duration:.3g} s) with {steps:.3g} steps; needs >= "
-            f"{MIN_STEPS_PER_CONTACT} (dt <= {plan.contact_duration / MIN_STEPS_PER_CONTACT:.3g} "
-            "s); 'auto' gives t_c/contact_model.steps_per_contact"
-        )
+    for what, span in (
+        ("the shortest contact (t_c", plan.contact_duration),
+        ("a sticking contact's tangential oscillation (half-period", plan.tangential_half_period),
+    ):
+        steps = span / plan.granule
+        if steps < MIN_STEPS_PER_CONTACT:
+            problems.append(
+                f"solver.dt: {plan.granule:g} s resolves {what} = {span:.3g} s) with "
+                f"{steps:.3g} steps; needs >= {MIN_STEPS_PER_CONTACT} (dt <= "
+                f"{span / MIN_STEPS_PER_CONTACT:.3g} s); 'auto' gives "
+                "min(t_c, half-period)/contact_model.steps_per_contact"
+            )
     return problems
 
 

@@ -643,6 +643,17 @@ class Solver(Strict):
         return self
 
 
+MAX_TANGENTIAL_RATIO = {"linear": 4.0 / 3.0, "hertz": 2.0}
+"""Largest k_t/k_n of a soft contact: an elastic solid's, as Poisson's ratio ν → −1 (the
+materials' lower limit): 2(1 − ν)/(2 − ν) on tangent stiffnesses (linear), 3(1 − ν)/(2 − ν) on
+Hertz's secant k_n√(R*δ) (Mindlin 1949; ``perga.analytic.contact.mindlin_ratio``)."""
+
+RATIO_LIMIT = {
+    "linear": "2(1 − ν)/(2 − ν) on tangent stiffnesses, 2/3 to 4/3 for ν in (−1, 0.5]",
+    "hertz": "3(1 − ν)/(2 − ν) on the secant k_n√(R*δ), 1 to 2 for ν in (−1, 0.5]",
+}
+
+
 class ContactModel(Strict):
     """[contact_model]: how granule contacts are resolved.
 
@@ -670,8 +681,13 @@ class ContactModel(Strict):
         "shared by every pair (hertz: the contact stiffness is k_n·√R*; or give the materials' "
         "youngs_modulus and poisson_ratio)",
     )
-    tangential_ratio: float = Field(
-        2.0 / 7.0, ge=0, le=1, description="k_t/k_n, in [0, 1]; default 2/7 (as LAMMPS)"
+    tangential_ratio: float | Literal["mindlin"] | None = Field(
+        None,
+        description="k_t/k_n of every pair: a number, in [0, 4/3] (linear: an elastic solid's "
+        "2(1 − ν)/(2 − ν), 4/3 as ν → −1) or [0, 2] (hertz, on the secant k_n√(R*δ): "
+        "3(1 − ν)/(2 − ν), 2 as ν → −1), or 'mindlin' (hertz: each pair's 6G*/E* from its "
+        "materials' youngs_modulus and poisson_ratio, Mindlin 1949); default 'mindlin' for a "
+        "hertz pair whose stiffness comes from its materials, else 2/7 (as LAMMPS)",
     )
     tangential_damping: float = Field(
         0.0,
@@ -721,6 +737,16 @@ class ContactModel(Strict):
                 "kind = 'hertz' takes one of stiffness ((4/3)E*, Pa), duration (s) or the "
                 "materials' youngs_modulus and poisson_ratio"
             )
+        ratio = self.tangential_ratio
+        if ratio == "mindlin" and self.kind != "hertz":
+            raise ValueError("tangential_ratio: 'mindlin' is for kind = 'hertz'")
+        if isinstance(ratio, float):
+            top = MAX_TANGENTIAL_RATIO[self.kind]
+            if not 0.0 <= ratio <= top:
+                raise ValueError(
+                    f"tangential_ratio: {ratio} is outside [0, {top:.4g}] for kind = "
+                    f"'{self.kind}' (an elastic solid's k_t/k_n, {RATIO_LIMIT[self.kind]})"
+                )
         return self
 
     @property

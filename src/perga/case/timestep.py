@@ -20,6 +20,7 @@ from perga.analytic.contact import (
     HertzTsuji,
     LinearSpringDashpot,
     damping_ratio,
+    mindlin_ratio,
     tsuji_alpha,
     tunnelling_time_step,
 )
@@ -152,6 +153,60 @@ def pair_stiffness(case: Case, a: str, b: str) -> float:
     return normal_stiffness(case)
 
 
+DEFAULT_TANGENTIAL_RATIO = 2.0 / 7.0
+"""k_t/k_n where neither the case nor the materials give one (LAMMPS's default)."""
+
+
+def tangential_ratio(case: Case, a: str, b: str) -> float:
+    """k_t/k_n of the soft contacts between materials ``a`` and ``b``: contact_model's number;
+    'mindlin', or by default for a Hertz pair whose stiffness comes from its materials, Mindlin's
+    6G*/E* (:func:`~perga.analytic.contact.mindlin_ratio`); else 2/7."""
+    cm, pair = case.contact_model, case.contact(a, b)
+    if isinstance(cm.tangential_ratio, float):
+        return cm.tangential_ratio
+    from_materials = (
+        cm.kind == "hertz"
+        and cm.stiffness is None
+        and cm.duration is None
+        and pair.stiffness is None
+        and pair.duration is None
+    )
+    if cm.tangential_ratio == "mindlin" or from_materials:
+        m_a, m_b = case.materials[a], case.materials[b]
+        if None in (m_a.youngs_modulus, m_a.poisson_ratio, m_b.youngs_modulus, m_b.poisson_ratio):
+            raise ValueError(f"Mindlin's k_t/k_n of {a}-{b} needs both materials' moduli")
+        return mindlin_ratio(
+            (m_a.youngs_modulus, m_b.youngs_modulus), (m_a.poisson_ratio, m_b.poisson_ratio)
+        )
+    return DEFAULT_TANGENTIAL_RATIO
+
+
+TANGENTIAL_INERTIA = 3.0
+"""A sticking disc contact's tangential over normal inverse mass: 1/m + r²/I = 3/m for a disc
+(I = m r²/2) on a wall, 6/m = 3/m_eff for two equal discs (on a hammer 3/m_eff counts the
+hammer's side thrice: a shorter period, a safe step)."""
+
+
+def tangential_half_periods(case: Case) -> dict[str, float]:
+    """Half-period π/ω_t of the tangential oscillation of a sticking contact of each soft contact
+    kind (:func:`_pairs`, its smallest granule), s: ω_t² = TANGENTIAL_INERTIA·k_t/m_eff with
+    k_t = ratio·k_n (linear), or ratio·k_n√(R*δ_max) (Hertz, at the largest overlap of an
+    elastic head-on impact at the fastest relative speed, ½m_eff v² = (2/5)k_n√R* δ_max^{5/2}:
+    the stiffest it gets); inf for k_t = 0."""
+    hertz = case.contact_model.kind == "hertz"
+    v = max(fastest_relative_speed(case), 1e-3)
+    out = {}
+    for name, m_eff, r_eff in _pairs(case):
+        a, b = pair_materials(case, name)
+        k_n = pair_stiffness(case, a, b)
+        if hertz:
+            k_n *= math.sqrt(r_eff)
+            k_n *= (1.25 * m_eff * v * v / k_n) ** 0.2  # √δ_max
+        k_t = tangential_ratio(case, a, b) * k_n
+        out[name] = math.pi / math.sqrt(k_t * TANGENTIAL_INERTIA / m_eff) if k_t else math.inf
+    return out
+
+
 def contact_durations(case: Case) -> dict[str, float]:
     """Head-on contact duration of each soft contact kind (granule-hammer, -wall, -granule), s.
 
@@ -203,7 +258,8 @@ class PairPlan:
     -granule), its ``materials``, restitution e, normal ``stiffness`` k_n (N/m linear; (4/3)E*,
     Pa, Hertz, whose contact stiffness is k_n√R*), dimensionless ``damping`` (ζ linear, Tsuji's
     α = √5ζ Hertz), the ``convention`` that gives it from e, the head-on ``duration`` t_c of the
-    smallest granule (s; Hertz at the fastest relative speed) and the granule steps it takes."""
+    smallest granule (s; Hertz at the fastest relative speed) and the granule steps it takes,
+    k_t/k_n and the tangential half-period of a sticking contact with the steps it takes."""
 
     contact: str
     materials: tuple[str, str]
@@ -214,6 +270,10 @@ class PairPlan:
     convention: str
     duration: float
     steps_per_contact: float
+    tangential_ratio: float
+    tangential_half_period: float
+    """π/ω_t of a sticking contact (:func:`tangential_half_periods`), s."""
+    steps_per_tangential_half_period: float
 
 
 CONVENTIONS = {
@@ -229,14 +289,20 @@ def contact_plan(case: Case, granule_dt: float) -> list[PairPlan]:
     """The soft contacts of ``case`` as taken with granule step ``granule_dt`` (s)."""
     cm = case.contact_model
     tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
+    half_periods = tangential_half_periods(case)
     out = []
     for name, t_c in contact_durations(case).items():
         a, b = pair_materials(case, name)
         e = case.contact(a, b).restitution
         unit = "N/m" if cm.kind == "linear" else "Pa, (4/3)E*: k_n·√R* per contact"
         k, damping = pair_stiffness(case, a, b), tune(e, cm.end)
-        convention = CONVENTIONS[cm.end]
-        out.append(PairPlan(name, (a, b), e, k, unit, damping, convention, t_c, t_c / granule_dt))
+        convention, half = CONVENTIONS[cm.end], half_periods[name]
+        out.append(
+            PairPlan(
+                name, (a, b), e, k, unit, damping, convention, t_c, t_c / granule_dt,
+                tangential_ratio(case, a, b), half, half / granule_dt,
+            )
+        )  # fmt: skip
     return out
 
 
@@ -247,14 +313,16 @@ class StepPlan:
     granule: the step of the granules (soft: perga's kernel; rigid: the Pymunk step);
     machine: the Pymunk step of rotor and hammers (soft: granule·granule_substeps; rigid: the
     same as granule, solver.dt/solver.substeps); contact_duration: the shortest soft contact
-    (inf for rigid); tunnelling: the tunnelling bound 0.5(r + t/2)/v_rel; rotation: the step turning
-    the rotor by MAX_ROTATION_PER_STEP; governed_by: what set an automatic step ('given' for a
-    step from solver.dt).
+    (inf for rigid); tangential_half_period: the shortest half-period of a sticking soft
+    contact's tangential oscillation (inf for rigid); tunnelling: the tunnelling bound
+    0.5(r + t/2)/v_rel; rotation: the step turning the rotor by MAX_ROTATION_PER_STEP;
+    governed_by: what set an automatic step ('given' for a step from solver.dt).
     """
 
     granule: float
     machine: float
     contact_duration: float
+    tangential_half_period: float
     tunnelling: float
     rotation: float
     governed_by: Literal["given", "contact", "tunnelling", "rotation"]
@@ -263,15 +331,22 @@ class StepPlan:
 def step_plan(case: Case) -> StepPlan:
     """Resolve solver.dt ('auto' or given) into the granule and machine steps of the case.
 
-    'auto' takes the smallest of t_c/steps_per_contact (soft only), half the tunnelling bound,
-    and the rotor-turn bound (per machine step: divided by granule_substeps for soft contacts);
-    a rigid step is then divided by solver.substeps (soft contacts take solver.substeps = 1).
+    'auto' takes the smallest of t_c/steps_per_contact (more steps for a strongly damped
+    contact, :func:`steps_for_damping`) and the tangential half-period/steps_per_contact of
+    each soft contact kind, half the tunnelling bound, and the rotor-turn bound (per machine
+    step: divided by granule_substeps for soft contacts); a rigid step is then divided by
+    solver.substeps (soft contacts take solver.substeps = 1).
     """
     cm, solver = case.contact_model, case.solver
     durations = contact_durations(case) if cm.soft else {}
+    half_periods = tangential_half_periods(case) if cm.soft else {}
     t_c = min(durations.values(), default=math.inf)
     resolved = min(
-        (d / contact_steps(case, name) for name, d in durations.items()), default=math.inf
+        (
+            min(d / contact_steps(case, name), half_periods[name] / cm.steps_per_contact)
+            for name, d in durations.items()
+        ),
+        default=math.inf,
     )
     tunnelling = tunnelling_time_step(
         radius_range(case)[0], thinnest_obstacle(case), fastest_relative_speed(case)
@@ -293,6 +368,7 @@ def step_plan(case: Case) -> StepPlan:
         granule=granule,
         machine=granule * substeps,
         contact_duration=t_c,
+        tangential_half_period=min(half_periods.values(), default=math.inf),
         tunnelling=tunnelling,
         rotation=rotation * substeps,
         governed_by=governed_by,  # type: ignore[arg-type]

@@ -21,7 +21,7 @@ from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
 from perga.case.placement import comb, held, initial_spins, initial_state
 from perga.case.schema import Case, CombPlacement
 from perga.case.sizes import initial_radii, masses, mean_mass, quantile_table
-from perga.case.timestep import pair_stiffness, step_plan
+from perga.case.timestep import pair_stiffness, step_plan, tangential_ratio
 from perga.geometry.polygon import vertex_tuples
 from perga.model.process import DamageSpec, FeedSpec, OutletSpec, ProcessSpec, Sizes
 from perga.model.spec import (
@@ -109,7 +109,6 @@ def _contact_model(case: Case) -> RigidContactSpec | SoftContactSpec:
         return RigidContactSpec()
     return SoftContactSpec(
         model=cm.kind,
-        tangential_ratio=cm.tangential_ratio,
         tangential_damping=cm.tangential_damping,
         rolling=cm.rolling,
         end=cm.end,
@@ -224,7 +223,11 @@ def scene_spec(case: Case) -> SceneSpec:
             c.pair[1],
             c.restitution,
             c.friction,
-            pair_stiffness(case, *c.pair) if case.contact_model.soft else None,
+            *(
+                (pair_stiffness(case, *c.pair), tangential_ratio(case, *c.pair))
+                if case.contact_model.soft
+                else ()
+            ),
         )
         for c in case.contacts
         if frozenset(c.pair) in pairs

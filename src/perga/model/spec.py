@@ -217,13 +217,15 @@ class ContactSpec:
     """Contact parameters of one unordered material pair: Newton restitution e in [0, 1] and
     Coulomb friction f >= 0, used exactly (not as a product of per-material values); for soft
     contacts the pair's normal stiffness k_n: N/m (linear) or (4/3)E*, Pa (Hertz: the contact
-    stiffness is k_n·√R*, R* from the radii of the contact itself), None for rigid ones."""
+    stiffness is k_n·√R*, R* from the radii of the contact itself; None for rigid ones) and
+    their tangential stiffness over it, k_t/k_n (default 2/7, as LAMMPS; unused by rigid ones)."""
 
     material_a: str
     material_b: str
     restitution: float
     friction: float
     stiffness: float | None = None
+    tangential_ratio: float = 2.0 / 7.0
 
     def __post_init__(self) -> None:
         problems: list[str] = []
@@ -233,6 +235,10 @@ class ContactSpec:
             problems.append(f"friction must be finite and >= 0 (got {self.friction})")
         if self.stiffness is not None:
             _positive(problems, "stiffness", self.stiffness, "N/m or Pa")
+        if not (math.isfinite(self.tangential_ratio) and self.tangential_ratio >= 0):
+            problems.append(
+                f"tangential_ratio must be finite and >= 0 (got {self.tangential_ratio})"
+            )
         _raise(f"contact {self.material_a}-{self.material_b}", problems)
 
     @property
@@ -383,7 +389,7 @@ class SoftContactSpec:
     """Soft granule contacts (:mod:`perga.contact.soft`) instead of Pymunk impulses.
 
     model: 'linear' or 'hertz' (each pair's k_n: :attr:`ContactSpec.stiffness`);
-    tangential_ratio: k_t/k_n; tangential_damping: ratio ζ_t of the tangential dashpot
+    tangential_damping: ratio ζ_t of the tangential dashpot
     −2ζ_t√(k_t m_eff)·v_t, in [0, 1); rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
     ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
@@ -392,7 +398,6 @@ class SoftContactSpec:
     """
 
     model: Literal["linear", "hertz"]
-    tangential_ratio: float = 2.0 / 7.0
     tangential_damping: float = 0.0
     rolling: float = 0.0
     end: Literal["force", "overlap"] = "force"
@@ -403,10 +408,8 @@ class SoftContactSpec:
         problems: list[str] = []
         if self.model not in ("linear", "hertz"):
             problems.append(f"model must be 'linear' or 'hertz' (got {self.model!r})")
-        for name in ("tangential_ratio", "rolling"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                problems.append(f"{name} must be finite and >= 0 (got {value})")
+        if not (math.isfinite(self.rolling) and self.rolling >= 0):
+            problems.append(f"rolling must be finite and >= 0 (got {self.rolling})")
         if not 0.0 <= self.tangential_damping < 1.0:
             problems.append(f"tangential_damping must be in [0, 1) (got {self.tangential_damping})")
         if self.end not in ("force", "overlap"):

@@ -391,9 +391,15 @@ def _reference(row: np.ndarray, a: Disc, b: Disc, u0: tuple[float, float]) -> Re
         return stiffness(delta) * abs(y[6]) - mu * max(normal(delta, rate), 0.0)
 
     def to_stick(sigma):
+        """Slip → stick once the stretch's sticking rate (``stretch_rate`` at ξ = σC) falls
+        behind the cap's: σ ξ̇ = σ v_t − (Hertz) C δ̇/(4δ) < Ċ."""
+
         def event(_t, y):
             delta, rate, accel, vt, *_ = state(y, sigma)
-            return sigma * vt - cap_rate(delta, rate, accel) if delta > 0.0 else 1.0
+            if delta <= 0.0:
+                return 1.0
+            rescale = 0.25 * cap(delta, rate) * rate / delta if hertz else 0.0
+            return sigma * vt - rescale - cap_rate(delta, rate, accel)
 
         event.terminal, event.direction = True, -1.0
         return event

@@ -41,16 +41,17 @@ def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
             if frozenset((a, b)) in pairs:
                 c = spec.contact(a, b)
                 assert c.stiffness is not None
-                k, e, f, rolling = c.stiffness, c.restitution, c.friction, soft.rolling
+                k, ratio, e, f = c.stiffness, c.tangential_ratio, c.restitution, c.friction
+                rolling = soft.rolling
             else:  # never touch: a valid row that is never read
-                k, e, f, rolling = 1.0, 1.0, 0.0, 0.0
+                k, ratio, e, f, rolling = 1.0, 0.0, 1.0, 0.0, 0.0
             rows[(i, j)] = contact_parameters(
                 soft.model,
                 e,
                 k_n=k,
                 friction=f,
                 rolling=rolling,
-                kt_ratio=soft.tangential_ratio,
+                kt_ratio=ratio,
                 zeta_t=soft.tangential_damping,
                 end=soft.end,
             )
@@ -64,7 +65,8 @@ def polygon_table(
     soft = spec.contact_model
     assert isinstance(soft, SoftContactSpec)
     shape = (len(materials), len(polygon_materials))
-    k_n, e, f = np.ones(shape), np.ones(shape), np.zeros(shape)
+    k_n, k_t = np.ones(shape), np.zeros(shape)
+    e, f = np.ones(shape), np.zeros(shape)
     granule_materials = spec.granule_materials
     for i, a in enumerate(materials):
         for j, b in enumerate(polygon_materials):
@@ -72,9 +74,8 @@ def polygon_table(
                 c = spec.contact(a, b)
                 assert c.stiffness is not None
                 k_n[i, j], e[i, j], f[i, j] = c.stiffness, c.restitution, c.friction
-    return contact_table(
-        k_n, soft.tangential_ratio * k_n, e, f, soft.model, soft.end, soft.tangential_damping
-    )
+                k_t[i, j] = c.tangential_ratio * c.stiffness
+    return contact_table(k_n, k_t, e, f, soft.model, soft.end, soft.tangential_damping)
 
 
 def soft_granules(
