@@ -58,6 +58,7 @@ MODULES = {
             "tests/case/test_timestep.py",
             "tests/case/test_pair_stiffness.py",
             "tests/case/test_materials.py",
+            "tests/case/test_tangential_stiffness.py",
         ),
     ),
     "records": Module("src/perga/model/records.py", ("tests/engine/test_energy.py",)),
