@@ -12,8 +12,14 @@ step's (pairs and polygons included), which is the bound on the speed-up printed
 one granule step is taken as the same for every granule, which overstates what a granule in free
 flight costs today (it has no contacts) and so understates the gain.
 
+``--local`` adds a per-neighbourhood bound beside the global one: only granules a hammer can
+reach within T (gap to a polygon's bounding circle within what the two close at v_bound), and
+those such a granule can reach in turn (closed over chains), take v_bound; every other granule
+can only be sped up by granules as slow as itself, and takes twice the fastest of them.
+
     python benchmarks/multirate_potential.py                       # both soft separators
     python benchmarks/multirate_potential.py --cases soft-separator --every 50
+    python benchmarks/multirate_potential.py --local --factors 1 10 100
 """
 
 from __future__ import annotations
@@ -36,8 +42,9 @@ CASES = {
 }
 
 
-def free_share(sim: Simulation, factor: int = 1) -> float:
-    """The share of granules free over the coming ``factor`` machine steps (module doc)."""
+def free_share(sim: Simulation, factor: int = 1, local: bool = False) -> float:
+    """The share of granules free over the coming ``factor`` machine steps (module doc; with
+    ``local`` the per-neighbourhood speed bound)."""
     g = sim.contacts.granules
     p = sim.contacts.polygons.polygons
     x, v, r = g.x, g.v, g.r
@@ -53,9 +60,13 @@ def free_share(sim: Simulation, factor: int = 1) -> float:
     )  # fmt: skip
     poly_speed = np.hypot(p.velocity[:, 0], p.velocity[:, 1]) + np.abs(p.omega) * rho
     v_bound = 2.0 * (speed.max() + (poly_speed.max() if len(rho) else 0.0))
-    reach = (speed + v_bound) * span + np.hypot(*g.gravity) * span**2
-    free = g.held == 0
+    fall = np.hypot(*g.gravity) * span**2
     tree = cKDTree(x)
+    bound = np.full(n, v_bound)
+    if local:
+        bound = _local_bounds(x, r, speed, tree, centres, rho, poly_speed, v_bound, span, fall)
+    reach = (speed + bound) * span + fall
+    free = g.held == 0
     for i, j in tree.query_pairs(2.0 * r.max() + reach.max(), output_type="ndarray"):
         gap = np.hypot(*(x[i] - x[j])) - r[i] - r[j]
         if gap <= reach[i] + reach[j]:
@@ -69,6 +80,29 @@ def free_share(sim: Simulation, factor: int = 1) -> float:
     return float(free.mean())
 
 
+def _local_bounds(x, r, speed, tree, centres, rho, poly_speed, v_bound, span, fall):
+    """Per granule, the speed it may gain within ``span`` (s): v_bound for the granules a hammer
+    (bounding circle ``centres``, ``rho``, point speed ``poly_speed``) can strike, and for every
+    granule a struck one can reach in turn; twice the fastest of the others for the rest."""
+    hot = np.zeros(len(r), dtype=bool)
+    for k in range(len(rho)):
+        gap = np.hypot(*(x - centres[k]).T) - rho[k] - r
+        hot |= gap <= (speed + v_bound + poly_speed[k]) * span + fall
+    reach = (speed + v_bound) * span + fall
+    radius = 2.0 * r.max() + 2.0 * reach.max()
+    frontier = np.flatnonzero(hot)
+    while frontier.size:
+        added = []
+        for i, near in zip(frontier, tree.query_ball_point(x[frontier], radius), strict=True):
+            for j in near:
+                if not hot[j] and np.hypot(*(x[i] - x[j])) - r[i] - r[j] <= reach[i] + reach[j]:
+                    hot[j] = True
+                    added.append(j)
+        frontier = np.array(added, dtype=int)
+    cold = 2.0 * speed[~hot].max() if (~hot).any() else 0.0
+    return np.where(hot, v_bound, cold)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=list(CASES))
@@ -77,6 +111,9 @@ def main() -> None:
         "--factors", type=int, nargs="+", default=[1, 10],
         help="free over this many machine steps (a longer free step)",
     )  # fmt: skip
+    parser.add_argument(
+        "--local", action="store_true", help="also the per-neighbourhood speed bound"
+    )
     args = parser.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.2f}")
     for name in args.cases:
@@ -84,23 +121,27 @@ def main() -> None:
         case = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
         sim = Simulation(scene_spec(case), record_impacts=False, track_energy=False)
         k = sim.contacts.substeps
-        shares: dict[int, list[float]] = {f: [] for f in args.factors}
+        bounds = (False, True) if args.local else (False,)
+        shares: dict[tuple[bool, int], list[float]] = {
+            (b, f): [] for b in bounds for f in args.factors
+        }
         steps = round(duration / sim.dt)
         for step in range(steps):
             if step % args.every == 0:
-                for f in args.factors:
-                    shares[f].append(free_share(sim, f))
+                for b, f in shares:
+                    shares[b, f].append(free_share(sim, f, b))
             sim.step()
-        samples = len(shares[args.factors[0]])
+        samples = len(shares[False, args.factors[0]])
         print(f"{name}: {len(sim.contacts.granules.r)} granules, k = {k} granule steps per "
               f"machine step, {samples} samples over {duration} s")  # fmt: skip
-        for f, values in shares.items():
+        for (b, f), values in shares.items():
             s_ = np.array(values)
             cost = (1.0 - s_) + s_ / (k * f)
             print(
-                f"  free over {f} machine step(s) ({k * f} granule steps): share mean "
-                f"{s_.mean():.3f} (min {s_.min():.3f}, max {s_.max():.3f}); kernel cost "
-                f"bound {cost.mean():.3f} of the uniform step, speed-up <= {1 / cost.mean():.2f}"
+                f"  {'local' if b else 'global'} bound, free over {f} machine step(s) "
+                f"({k * f} granule steps): share mean {s_.mean():.3f} (min {s_.min():.3f}, "
+                f"max {s_.max():.3f}); kernel cost bound {cost.mean():.3f} of the uniform "
+                f"step, speed-up <= {1 / cost.mean():.2f}"
             )
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 
