@@ -10,11 +10,13 @@ from perga.case import CaseError, load_case
 from perga.case.timestep import (
     MAX_ROTATION_PER_STEP,
     contact_durations,
+    contact_plan,
     fastest_relative_speed,
     hammer_effective_mass,
     normal_stiffness,
     step_plan,
     steps_for_damping,
+    tangential_half_periods,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -175,3 +177,109 @@ def test_strong_damping_gets_twenty_steps_per_dashpot_time(zeta):
         assert steps == 50.0
     else:
         assert per_tau == pytest.approx(20.0, rel=1e-12)
+
+
+def test_a_size_distribution_plans_for_its_smallest_granule(tmp_path):
+    """Radii 1.5 and 2.5 mm (a table, 5 mm thick): the contacts are planned for the smallest
+    granule, m ∝ r², so a linear wall contact lasting 0.1 ms for the 2.5 mm granule lasts
+    0.1 ms·(1.5/2.5) for it, and the tunnelling bound is 0.5(r_min + t/2)/v (1e-12)."""
+    case = _case(
+        tmp_path,
+        '[granules.size]\nkind = "table"\nradii = [0.0015, 0.0025]\nfractions = [0.5, 0.5]\n'
+        '[contact_model]\nkind = "linear"\nduration = 1e-4\n',
+        ("mass = 0.00016", "thickness = 0.005"),
+    )
+    assert contact_durations(case)["granule-wall"] == pytest.approx(0.6e-4, rel=1e-12)
+    bound = tunnelling_time_step(0.0015, case.hammer_plate.thickness, fastest_relative_speed(case))
+    assert step_plan(case).tunnelling == pytest.approx(bound, rel=1e-12)
+
+
+def test_a_free_hammers_own_velocity_adds_to_the_fastest_speed(tmp_path):
+    """A free hammer launched at (3, 4) m/s: ω·tip + 5 m/s (1e-12)."""
+    case = _case(tmp_path, "", ('mount = "hinged"', 'mount = "free"\nvelocity = [3.0, 4.0]'))
+    tip = case.hammers.hinge_radius + 0.055
+    speed = case.rotor.angular_velocity * tip + 5.0
+    assert fastest_relative_speed(case) == pytest.approx(speed, rel=1e-12)
+
+
+def test_a_free_hammer_off_its_axis_offers_a_quarter_of_its_mass(tmp_path):
+    """A uniform rectangle outline 60 × 16 mm whose centre of mass is 6 mm off the hammer axis
+    (the hinge point at its origin), free: M/(1 + Mρ²/I_C) = M/4 wherever the rectangle lies
+    (ρ² = (L² + w²)/4, I_C = M(L² + w²)/12), M = ρ·area·thickness (1e-12)."""
+    (tmp_path / "offset.txt").write_text("-5 -2\n55 -2\n55 14\n-5 14\n")
+    plate = 'shape = { kind = "plate", length = 0.06, width = 0.02, hinge_offset = 0.005 }'
+    shape = 'shape = { kind = "file", path = "offset.txt", units = "mm", thickness = 0.01 }'
+    path = tmp_path / "case.toml"
+    text = SINGLE.replace(plate, shape).replace('mount = "hinged"', 'mount = "free"')
+    path.write_text(text.replace("mass = 0.02826\n", ""))
+    mass = 7850.0 * 0.060 * 0.016 * 0.01
+    assert hammer_effective_mass(load_case(path)) == pytest.approx(mass / 4, rel=1e-12)
+
+
+def test_the_rotor_turn_bounds_the_machine_step_with_substeps(tmp_path):
+    """Soft contacts at 8 granule steps per machine step, slow enough contacts (10 ms) that the
+    rotor governs (its bound per granule step, 0.05/(8ω), is below half the tunnelling bound,
+    0.25(r + t/2)/(ω·tip), by 0.05·tip/(8·0.25(r + t/2)) = 0.84): the machine step turns the
+    rotor by 0.05 rad, the granule step is an eighth of it, and the plan states the machine
+    step's bound (1e-12)."""
+    case = _case(
+        tmp_path,
+        '[contact_model]\nkind = "linear"\nduration = 1e-2\ngranule_substeps = 8\n',
+    )
+    plan = step_plan(case)
+    machine = 0.05 / case.rotor.angular_velocity
+    assert plan.governed_by == "rotation"
+    assert plan.rotation == pytest.approx(machine, rel=1e-12)
+    assert plan.machine == pytest.approx(machine, rel=1e-12)
+    assert plan.granule == pytest.approx(machine / 8, rel=1e-12)
+
+
+def test_rigid_substeps_divide_the_step(tmp_path):
+    """Rigid, solver.substeps = 4: the granule (Pymunk) step is a quarter of the automatic
+    step, and the machine takes the same (1e-15)."""
+    one = step_plan(_case(tmp_path, ""))
+    four = step_plan(_case(tmp_path, "", ("duration = 0.2", "duration = 0.2\nsubsteps = 4")))
+    assert four.granule == pytest.approx(one.granule / 4, rel=1e-15)
+    assert four.machine == four.granule
+
+
+def test_thin_walls_bound_the_tunnelling_step(tmp_path):
+    """A 1 mm chamber wall, thinner than the 10 mm hammer: 0.5(r + t_wall/2)/v (1e-12)."""
+    case = _case(tmp_path, "", ('material = "steel"\n\n[materials', 'material = "steel"\n'
+                                'wall_thickness = 0.001\n\n[materials'))  # fmt: skip
+    bound = tunnelling_time_step(0.0025, 0.001, fastest_relative_speed(case))
+    assert step_plan(case).tunnelling == pytest.approx(bound, rel=1e-12)
+
+
+def test_plans_are_frozen(tmp_path):
+    case = _case(tmp_path, '[contact_model]\nkind = "linear"\nduration = 1e-4\n')
+    plan = step_plan(case)
+    with pytest.raises(AttributeError):
+        plan.granule = 1.0
+    with pytest.raises(AttributeError):
+        contact_plan(case, plan.granule)[0].duration = 1.0
+
+
+def test_speeds_below_a_millimetre_a_second_are_planned_at_it(tmp_path):
+    """A rotor at 1e-4 rpm (tip 1.4e-6 m/s): Hertz contacts are planned at the floor of 1 mm/s
+    (t_c ∝ v^{-1/5} has no bound as v → 0). e = 1 and k_n given: t_c = C(m²/(k²v))^{1/5} and
+    the tangential half-period at the peak overlap (1e-6, 1e-12); a duration given: it is the
+    duration at 1 mm/s (1e-9)."""
+    slow = ("rpm = 600.0", "rpm = 0.0001")
+    hertz = '[contact_model]\nkind = "hertz"\n'
+    path = tmp_path / "case.toml"
+    path.write_text(
+        SINGLE.replace(*slow).replace("restitution = 0.7", "restitution = 1.0")
+        + hertz
+        + "stiffness = 1e8\n"
+    )
+    case = load_case(path)
+    assert fastest_relative_speed(case) < 1e-5
+    k, m, v = 1e8 * math.sqrt(0.0025), case.granule_mass, 1e-3
+    t_c = HERTZ_DURATION_COEFFICIENT * (m * m / (k * k * v)) ** 0.2
+    assert contact_durations(case)["granule-wall"] == pytest.approx(t_c, rel=1e-6)
+    peak = (1.25 * m * v * v / k) ** 0.4
+    half = math.pi / math.sqrt(3 * 2 / 7 * k * math.sqrt(peak) / m)
+    assert tangential_half_periods(case)["granule-wall"] == pytest.approx(half, rel=1e-12)
+    given = _case(tmp_path, hertz + "duration = 1e-4\n", slow)
+    assert contact_durations(given)["granule-wall"] == pytest.approx(1e-4, rel=1e-9)
