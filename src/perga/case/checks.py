@@ -337,22 +337,35 @@ def _hertz_moduli(case: Case) -> list[str]:
          if m in case.materials and c.stiffness is None and c.duration is None}
     )  # fmt: skip
     given = [m for m in used if case.materials[m].youngs_modulus is not None]
-    cm = case.contact_model
-    shared = "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""
+    shared = _shared_stiffness(case)
     if shared:
         return [
             f"materials.{m}.youngs_modulus: contact_model.{shared} already sets every Hertz "
             "pair's stiffness; give one of the two"
             for m in given
         ]
+    return _missing_moduli(
+        case, used, "Hertz contacts without contact_model.stiffness or duration need"
+    )
+
+
+def _shared_stiffness(case: Case) -> str:
+    """The contact_model key that sets every pair's stiffness ('stiffness', 'duration'), or ''."""
+    cm = case.contact_model
+    return "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""
+
+
+def _missing_moduli(case: Case, used: list[str], who: str) -> list[str]:
+    """A problem for each material of ``used`` without youngs_modulus or poisson_ratio, which
+    ``who`` ('… need') needs."""
     problems = []
     for m in used:
         missing = [k for k in ("youngs_modulus", "poisson_ratio")
                    if getattr(case.materials[m], k) is None]  # fmt: skip
         if missing:
             problems.append(
-                f"materials.{m}: Hertz contacts without contact_model.stiffness or duration need "
-                f"{' and '.join(missing)} (Pa; -) of every material in [[contacts]]"
+                f"materials.{m}: {who} {' and '.join(missing)} (Pa; -) of every material in "
+                "[[contacts]]"
             )
     return problems
 
@@ -360,10 +373,9 @@ def _hertz_moduli(case: Case) -> list[str]:
 def _mindlin_moduli(case: Case) -> list[str]:
     """contact_model.tangential_ratio = 'mindlin' takes each pair's k_t/k_n from both materials'
     Young's modulus and Poisson's ratio: it needs them, and so the stiffness from them too."""
-    cm = case.contact_model
-    if cm.tangential_ratio != "mindlin":
+    if case.contact_model.tangential_ratio != "mindlin":
         return []
-    shared = "stiffness" if cm.stiffness is not None else "duration" if cm.duration else ""
+    shared = _shared_stiffness(case)
     if shared:
         return [
             f"contact_model.tangential_ratio: 'mindlin' takes k_t/k_n from the materials' "
@@ -371,16 +383,7 @@ def _mindlin_moduli(case: Case) -> list[str]:
             "number (3(1 − ν)/(2 − ν) for one material on a rigid body)"
         ]
     used = sorted({m for c in case.contacts for m in c.pair if m in case.materials})
-    problems = []
-    for m in used:
-        missing = [k for k in ("youngs_modulus", "poisson_ratio")
-                   if getattr(case.materials[m], k) is None]  # fmt: skip
-        if missing:
-            problems.append(
-                f"materials.{m}: contact_model.tangential_ratio = 'mindlin' needs "
-                f"{' and '.join(missing)} (Pa; -) of every material in [[contacts]]"
-            )
-    return problems
+    return _missing_moduli(case, used, "contact_model.tangential_ratio = 'mindlin' needs")
 
 
 def _time_step(case: Case) -> list[str]:
