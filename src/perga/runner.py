@@ -63,7 +63,8 @@ class RunSummary:
     time_step: dict[str, float | str] = field(default_factory=dict)
     contacts: list[dict[str, object]] = field(default_factory=list)
     """Soft contacts: per contact kind its materials, stiffness, damping and the convention
-    that gives it from e, duration and steps per contact (:class:`perga.case.timestep.PairPlan`)."""
+    that gives it from e, duration and steps per contact, k_t/k_n, and the tangential
+    half-period of a sticking contact with its steps (:class:`perga.case.timestep.PairPlan`)."""
     simulated_time: float = 0.0
     wall_time: float = 0.0
     steps_per_second: float = 0.0
