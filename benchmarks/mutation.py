@@ -83,6 +83,27 @@ _CHECK_INERTIA = (
     "if not (lower * (1.0 - _PARALLEL_AXIS_TOLERANCE) <= I_A < math.inf and I_A > 0.0):"
 )
 _LEDGER_DEFAULT = "an EnergyLedger default: its one maker, LedgerTerms.close, passes every field"
+_NUMBA_CACHE = "numba's on-disk cache of the compiled function, not its results"
+_STATIC_NEGATIVE = (
+    "any value that is not a row marks the static body: STATIC is only compared with itself "
+    "(rows are >= 0)"
+)
+_STATIC_ZERO = (
+    "row 0 is the rotor (after_step reads its ω there), never a pin's body b (hinges join the"
+    " rotor a to a hammer b, the axis pin the rotor to the static body): 0 marks the static "
+    "body as well"
+)
+_RESHAPE = "numpy (2.4) takes any negative size as the one to infer: the same (k, 2) shape"
+_INFINITE_MOMENT = (
+    "no metered body has an infinite moment: the meter keeps the dynamic bodies, whose "
+    "moments (a hammer's I_C, a driven rotor's inertia) the spec checks finite; the kinematic"
+    " rotor is not metered"
+)
+_DRIVE_TERM = (
+    'terms["drive"] is never read: the drive\'s work comes from the moment balance '
+    "(Drive.removed stays 0)"
+)
+_ZIP_BODIES = "both lists zipped are made from self._bodies: equal lengths"
 EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("impact", 55, 53, "ReplaceComparisonOperator_LtE_Lt#0"): (
         _CHECK_INERTIA,
@@ -221,6 +242,78 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("records", 147, 30, "NumberReplacer#11"): (
         "joint_correction: float = 0.0",
         _LEDGER_DEFAULT,
+    ),
+    ("energy", 74, 9, "ReplaceUnaryOperator_USub_Invert#0"): (
+        "STATIC = -1",
+        _STATIC_NEGATIVE,
+    ),
+    ("energy", 74, 10, "NumberReplacer#0"): (
+        "STATIC = -1",
+        _STATIC_NEGATIVE,
+    ),
+    ("energy", 74, 9, "ReplaceUnaryOperator_USub_Not#0"): (
+        "STATIC = -1",
+        _STATIC_ZERO,
+    ),
+    ("energy", 74, 10, "NumberReplacer#1"): (
+        "STATIC = -1",
+        _STATIC_ZERO,
+    ),
+    ("energy", 80, 11, "NumberReplacer#2"): (
+        ('spin = 0.0 if body.moment == float("inf") else body.moment * body.angular_velocity**2'),
+        _INFINITE_MOMENT,
+    ),
+    ("energy", 80, 11, "NumberReplacer#3"): (
+        ('spin = 0.0 if body.moment == float("inf") else body.moment * body.angular_velocity**2'),
+        _INFINITE_MOMENT,
+    ),
+    ("energy", 119, 18, "ReplaceUnaryOperator_USub_Invert#1"): (
+        ").reshape(-1, 2)",
+        _RESHAPE,
+    ),
+    ("energy", 119, 19, "NumberReplacer#10"): (
+        ").reshape(-1, 2)",
+        _RESHAPE,
+    ),
+    ("energy", 123, 18, "ReplaceUnaryOperator_USub_Invert#2"): (
+        ").reshape(-1, 2)",
+        _RESHAPE,
+    ),
+    ("energy", 123, 19, "NumberReplacer#14"): (
+        ").reshape(-1, 2)",
+        _RESHAPE,
+    ),
+    ("energy", 149, 42, "ReplaceUnaryOperator_USub_Invert#3"): (
+        "self._pins.read().reshape(-1, 2),",
+        _RESHAPE,
+    ),
+    ("energy", 149, 43, "NumberReplacer#20"): (
+        "self._pins.read().reshape(-1, 2),",
+        _RESHAPE,
+    ),
+    ("energy", 163, 56, "NumberReplacer#38"): (
+        'terms = {"friction": 0.0, "drag": 0.0, "drive": 0.0, "contact": 0.0}',
+        _DRIVE_TERM,
+    ),
+    ("energy", 163, 56, "NumberReplacer#39"): (
+        'terms = {"friction": 0.0, "drag": 0.0, "drive": 0.0, "contact": 0.0}',
+        _DRIVE_TERM,
+    ),
+    ("energy", 172, 81, "ReplaceTrueWithFalse#0"): (
+        "* sum(abs(k - k0) for k, k0 in zip(kinetics, self._kinetics0, strict=True))",
+        _ZIP_BODIES,
+    ),
+    ("energy", 177, 70, "ReplaceTrueWithFalse#1"): (
+        "for b, r0 in zip(self._bodies, self._centres0, strict=True)",
+        _ZIP_BODIES,
+    ),
+    ("energy", 187, 18, "ReplaceTrueWithFalse#2"): (
+        "@numba.njit(cache=True)",
+        _NUMBA_CACHE,
+    ),
+    ("energy", 210, 18, "ReplaceTrueWithFalse#3"): (
+        "@numba.njit(cache=True)",
+        _NUMBA_CACHE,
     ),
 }
 """Surviving mutants that cannot change any result, keyed by (module, line, column, operator):
