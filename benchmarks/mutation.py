@@ -104,6 +104,15 @@ _DRIVE_TERM = (
     "(Drive.removed stays 0)"
 )
 _ZIP_BODIES = "both lists zipped are made from self._bodies: equal lengths"
+_ZETA_T_CHECKED = (
+    "ζ_t < 0 and ζ_t = 1 are refused where rows are made (contact_parameters, polygon_set, "
+    "the spec); at ζ_t = 0 2ζ_t√(k_t m) is the shortcut's 0"
+)
+_DEAD_SLID = (
+    "the else branch is dead: sliding needs |F_t| > f|F_n| >= 0, so F_t != 0 and k_t > 0 (k_t"
+    " = 0 makes c_t = 0 and F_t = 0)"
+)
+_FLAG = "a flag: every reader of P_HERTZ and P_CLAMP tests it against 0"
 EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("impact", 55, 53, "ReplaceComparisonOperator_LtE_Lt#0"): (
         _CHECK_INERTIA,
@@ -314,6 +323,121 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("energy", 210, 18, "ReplaceTrueWithFalse#3"): (
         "@numba.njit(cache=True)",
         _NUMBA_CACHE,
+    ),
+    ("laws", 54, 11, "NumberReplacer#2"): (
+        "N_PARAMS = 8",
+        (
+            "an unused ninth column: rows, tables and the kernel's shape check are all sized "
+            "by N_PARAMS, columns read by their P_* index"
+        ),
+    ),
+    ("laws", 68, 12, "ReplaceTrueWithFalse#0"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 79, 12, "ReplaceTrueWithFalse#1"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 114, 12, "ReplaceTrueWithFalse#2"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 134, 12, "ReplaceTrueWithFalse#3"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 169, 12, "ReplaceTrueWithFalse#4"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 176, 12, "ReplaceTrueWithFalse#5"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 186, 12, "ReplaceTrueWithFalse#6"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 196, 12, "ReplaceTrueWithFalse#7"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 209, 12, "ReplaceTrueWithFalse#8"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 242, 12, "ReplaceTrueWithFalse#9"): (
+        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+        _NUMBA_CACHE,
+    ),
+    ("laws", 76, 42, "ReplaceComparisonOperator_Gt_GtE#0"): (
+        "return delta + 0.5 * dt * abs(ddelta) > 0.0",
+        (
+            "differs only at δ = −½dt|δ̇| exactly, the edge of the kick interval, where the "
+            "law's normal force is 0"
+        ),
+    ),
+    ("laws", 129, 10, "ReplaceComparisonOperator_Lt_LtE#0"): (
+        "if fn < 0.0 and clamp != 0.0:",
+        ("sets F_n = 0 where it is ±0 already: the cap f|F_n| and the force sums are the same"),
+    ),
+    ("laws", 154, 57, "NumberReplacer#40"): (
+        "ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0",
+        _ZETA_T_CHECKED,
+    ),
+    ("laws", 154, 57, "NumberReplacer#41"): (
+        "ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0",
+        _ZETA_T_CHECKED,
+    ),
+    ("laws", 158, 15, "ReplaceComparisonOperator_Gt_GtE#1"): (
+        "if abs(ft) > cap:",
+        (
+            "at |F_t| = cap both branches give the same force and stretch, and losses equal "
+            "algebraically"
+        ),
+    ),
+    ("laws", 160, 42, "ReplaceComparisonOperator_Gt_GtE#2"): (
+        "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
+        _DEAD_SLID,
+    ),
+    ("laws", 160, 44, "NumberReplacer#45"): (
+        "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
+        _DEAD_SLID,
+    ),
+    ("laws", 160, 53, "NumberReplacer#46"): (
+        "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
+        _DEAD_SLID,
+    ),
+    ("laws", 160, 53, "NumberReplacer#47"): (
+        "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
+        _DEAD_SLID,
+    ),
+    ("laws", 253, 14, "NumberReplacer#67"): (
+        "if mur == 0.0 or w_rel == 0.0:",
+        ("μ_r >= 0 is checked where rows are made; at μ_r = 0 the formula's torque is ±0 anyway"),
+    ),
+    ("laws", 253, 18, "ReplaceOrWithAnd#0"): (
+        "if mur == 0.0 or w_rel == 0.0:",
+        (
+            "min(μ_r R|F_n|, |w| I/dt) is 0 when μ_r = 0 or w = 0: the early return only "
+            "saves work (a −0.0 torque adds nothing)"
+        ),
+    ),
+    ("laws", 262, 4, "ReplaceBinaryOperator_Mul_Div#47"): (
+        "*,",
+        (
+            "contact_parameters' keyword-only marker made positional-only: every call passes "
+            "model and e by position and the rest by keyword"
+        ),
+    ),
+    ("laws", 305, 19, "NumberReplacer#88"): (
+        'row[P_HERTZ] = 1.0 if model == "hertz" else 0.0',
+        _FLAG,
+    ),
+    ("laws", 306, 19, "NumberReplacer#92"): (
+        'row[P_CLAMP] = 1.0 if end == "force" else 0.0',
+        _FLAG,
     ),
 }
 """Surviving mutants that cannot change any result, keyed by (module, line, column, operator):
