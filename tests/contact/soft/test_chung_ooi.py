@@ -57,7 +57,18 @@ from perga.contact.soft import (
     plane,
     uniform_table,
 )
-from perga.contact.soft.laws import P_CLAMP, P_DAMP, P_HERTZ, P_KN, P_KT, P_MU
+from perga.contact.soft.laws import (
+    P_CLAMP,
+    P_DAMP,
+    P_HERTZ,
+    P_KN,
+    P_KT,
+    P_MU,
+    contact_force,
+    rolling_torque,
+    spring_energy,
+    tangential_force,
+)
 
 from .helpers import impact
 
@@ -769,3 +780,88 @@ def test_8_impact_of_discs_of_different_sizes(ratio, model, e):
                 tol_b = _rigid_spin_tolerance(row, m_eff, v_n, b.r, change_b, change_b)
                 assert w_a == pytest.approx(w0 + change_a, abs=tol_a)
                 assert w_b == pytest.approx(change_b, abs=tol_b)
+
+
+# --- Added by the mutation run (docs/testing.md): the tangential law and rolling, one step ----
+
+# (hertz, k_t N/m, ζ_t, ξ m, v_t m/s, F_n N) with f = 0.5: sticking (|trial| < f F_n) and
+# sliding, undamped and damped, linear and Hertz, and a soft linear spring (k_t < 1 N/m) sliding
+TANGENTIAL_CASES = [
+    (hertz, 2e5, zeta_t, xi, vt, 2.0)
+    for hertz in (0.0, 1.0)
+    for zeta_t in (0.0, 0.3)
+    for xi, vt in ((1e-6, 0.01), (6e-6, 2.0))
+] + [(0.0, 0.5, 0.0, 1e-2, 0.01, 1e-4)]
+
+
+@pytest.mark.parametrize(("hertz", "kt", "zeta_t", "xi", "vt", "fn"), TANGENTIAL_CASES)
+def test_tangential_law_against_its_definition(hertz, kt, zeta_t, xi, vt, fn):
+    """One step of ``tangential_force`` (f = 0.5, m = 1 g, dt = 1 µs) against the law written
+    out: trial force −k_t(ξ + v_t dt) − c v_t, N, with c = 2ζ_t√(k_t m) (ζ_t the damping
+    ratio); past the Coulomb cap f|F_n| the force is the cap and the spring is rescaled to it
+    (−k_t ξ' − c v_t = F_t); stored energy ½k_t ξ², J (``spring_energy``; a Hertz history is
+    h = ξ√k_t); energy lost = −F_t v_t dt − (½k_t ξ'² − ½k_t ξ²), J. Force, stretch and energy
+    1e-12 relative (rounding); the loss 1e-9 (up to 200× smaller than the terms it is the
+    difference of)."""
+    mu, m, dt = 0.5, 1e-3, 1e-6
+    to_h = math.sqrt(kt) if hertz else 1.0
+    ft, h, lost = tangential_force(kt, zeta_t, mu, fn, vt, m, xi * to_h, dt, hertz)
+    c = 2.0 * zeta_t * math.sqrt(kt * m)
+    trial = -kt * (xi + vt * dt) - c * vt
+    expected = math.copysign(mu * fn, trial) if abs(trial) > mu * fn else trial
+    xi_new = -(expected + c * vt) / kt
+    assert ft == pytest.approx(expected, rel=1e-12)
+    assert h / to_h == pytest.approx(xi_new, rel=1e-12)
+    assert spring_energy(kt, hertz, xi * to_h) == pytest.approx(0.5 * kt * xi**2, rel=1e-12)
+    assert spring_energy(kt, hertz, h) == pytest.approx(0.5 * kt * xi_new**2, rel=1e-12)
+    stored = 0.5 * kt * (xi_new**2 - xi**2)
+    assert lost == pytest.approx(-expected * vt * dt - stored, rel=1e-9)
+
+
+@pytest.mark.parametrize("hertz", [0.0, 1.0])
+def test_contact_force_dissipates_the_dashpot_and_the_tangential_losses(hertz):
+    """``contact_force`` inside a contact (δ > ½dt δ̇): the normal dissipation is the
+    dashpot's work over the step, (F_n − spring)·δ̇ dt with the dashpot D√(k m)·δ̇ (linear) or
+    D√(k m)·δ^{1/4}δ̇ (Hertz, to O(dt²): its exact impulse over the kick), J, and the total
+    adds the tangential half's loss (sliding here). Linear 1e-12 relative (rounding), Hertz
+    1e-6 (the impulse's O(dt²), (dt δ̇/δ)²/128 = 3e-8)."""
+    kn, damp, kt, dampt, mu, m, dt = 1e6, 0.4, 2e5, 0.3, 0.5, 1e-3, 1e-6
+    delta, ddelta, vt, xi = 1e-4, 0.2, 0.05, 1e-3
+    fn, ft, h, lost = contact_force(
+        kn, damp, hertz, 1.0, kt, dampt, mu, delta, ddelta, vt, m, xi, dt
+    )
+    spring = kn * delta**1.5 if hertz else kn * delta
+    dashpot = damp * math.sqrt(kn * m) * (delta**0.25 if hertz else 1.0) * ddelta
+    assert fn == pytest.approx(spring + dashpot, rel=1e-6 if hertz else 1e-12)
+    ft_t, h_t, lost_t = tangential_force(kt, dampt, mu, fn, vt, m, xi, dt, hertz)
+    assert (ft, h) == (ft_t, h_t)
+    assert lost_t > 0.0
+    normal = (fn - spring) * ddelta * dt
+    assert normal == pytest.approx(dashpot * ddelta * dt, rel=1e-6 if hertz else 1e-12)
+    assert lost == pytest.approx(normal + lost_t, rel=1e-12)
+
+
+@pytest.mark.parametrize("mu_r", [0.1, 1.0])
+def test_rolling_torque_stops_the_rolling_without_reversing_it(mu_r):
+    """``rolling_torque`` (N·m) on a contact of rolling radius R = 2 mm, reduced moment
+    I = 4e-10 kg·m², F_n = 3 N, dt = 1 µs, relative rolling w = ±1 and ±40 rad/s: where the
+    resistance μ_r R|F_n| would stop w within the step, the torque stops it exactly
+    (w + M dt/I = 0, to 1e-12 of w: rounding); otherwise it is the resistance, opposing w
+    (1e-12 relative), and w keeps its sign. None without rolling (w = 0) or resistance."""
+    r, inertia, fn, dt = 2e-3, 4e-10, 3.0, 1e-6
+    params = uniform_table(contact_parameters("linear", 0.5, k_n=1e6, rolling=mu_r))
+    resistance = mu_r * r * fn
+    regimes = set()
+    for w in (-1.0, 1.0, -40.0, 40.0):
+        torque = rolling_torque(params, 0, 0, fn, w, r, inertia, dt)
+        after = w + torque * dt / inertia
+        if abs(w) * inertia / dt > resistance:
+            assert torque == pytest.approx(-math.copysign(resistance, w), rel=1e-12)
+            assert 0.0 < after / w < 1.0
+        else:
+            assert after == pytest.approx(0.0, abs=1e-12 * abs(w))
+        regimes.add(abs(w) * inertia / dt > resistance)
+    assert regimes == {True, False}
+    assert rolling_torque(params, 0, 0, fn, 0.0, r, inertia, dt) == 0.0
+    none = uniform_table(contact_parameters("linear", 0.5, k_n=1e6))
+    assert rolling_torque(none, 0, 0, fn, 40.0, r, inertia, dt) == 0.0
