@@ -442,6 +442,10 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
         'row[P_CLAMP] = 1.0 if end == "force" else 0.0',
         _FLAG,
     ),
+    ("timestep", 81, 42, "NumberReplacer#13"): (
+        "m = float(masses(case, np.array([r]))[0]) if case.granules.size else case.granule_mass",
+        "a one-element array: [-1] is [0]",
+    ),
 }
 """Surviving mutants that cannot change any result, keyed by (module, line, column, operator):
 (the source line's text, stripped, to catch a stale entry; why it is equivalent)."""
