@@ -101,13 +101,10 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     O(dt²); at first touch it applies only the part of the step the bodies overlap, so that e
     does not depend on where in a step first touch falls (docs/validation.md).
 
-    Dissipated energy over the step, J, from the law itself: normal (F_n − F_spring)·δ̇·dt
+    Dissipated energy over the step, J (< 0 only sliding with a dashpot above the cap, whose
+    rescaled spring stores more than the work; docs/testing.md): normal (F_n − F_spring)·δ̇·dt
     (the dashpot's work, and the spring energy lost while F_n is clamped at 0) plus tangential
-    −F_t v_t dt − ΔE_t (Coulomb slip, tangential damping, and the O(dt²) loss of the spring's
-    update ξ += v_t dt), E_t the spring's stored energy (``tangential_force``). It is ≥ 0 but
-    while a contact slides with a tangential dashpot stronger than the Coulomb cap: the
-    Cundall-Strack rescaling then stretches the spring against the dashpot, which stores more
-    than the force's work, given back later (docs/testing.md, the laws' mutation run).
+    −F_t v_t dt − ΔE_t (slip, damping, the spring's O(dt²) update), E_t (``tangential_force``).
     """
     fn, lost = normal_force(kn, damp, hertz, clamp, delta, ddelta, m_eff, dt)
     ft, xi, slip = tangential_force(kt, dampt, mu, fn, vt, m_eff, xi, dt, hertz)
