@@ -528,12 +528,31 @@ def rerun(name: str, outcome: str) -> None:
     resume(name)
 
 
+def _tree(tmp: Path, archive: bytes, source: str, mutation=None) -> dict[str, str]:
+    """Extract ``archive`` (``src/`` as committed, ``git archive HEAD src``) into ``tmp``,
+    apply ``mutation`` (a cosmic-ray mutation spec, None: none) to its ``source``, and return
+    the environment whose imports come from that copy."""
+    import cosmic_ray.plugins
+    from cosmic_ray.mutating import apply_mutation
+
+    subprocess.run(["tar", "-x", "-C", str(tmp)], input=archive, check=True)
+    if mutation is not None:
+        operator = cosmic_ray.plugins.get_operator(mutation.operator_name)()
+        apply_mutation(tmp / source, operator, mutation.occurrence)
+    return _env() | {"PYTHONPATH": os.pathsep.join([str(tmp / "src"), str(ROOT)])}
+
+
+def _committed_src() -> bytes:
+    """``src/`` as committed, a tar archive (a session may be mutating the work tree's)."""
+    return subprocess.run(
+        ["git", "archive", "HEAD", "src"], cwd=ROOT, capture_output=True, check=True
+    ).stdout
+
+
 def check(name: str, where: str, tests: list[str]) -> bool:
     """Whether ``tests`` (pytest node ids) pass unmutated and fail with the mutant ``where`` of
     module ``name`` (``LINE:COLUMN:OPERATOR#OCCURRENCE`` as the report prints it) applied to a
     temporary copy of ``src/`` (the kept session and the work tree are left alone)."""
-    import cosmic_ray.plugins
-    from cosmic_ray.mutating import apply_mutation
     from cosmic_ray.work_db import WorkDB, use_db
 
     line, column, operator = where.split(":", 2)
@@ -548,19 +567,10 @@ def check(name: str, where: str, tests: list[str]) -> bool:
             and m.occurrence == int(occurrence)
         ]
     command = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", *tests]
-    outcomes = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for mutate in (False, True):  # src/ as committed (a session may be mutating the tree's)
-            tree = Path(tmp) / str(mutate)
-            tree.mkdir()
-            archive = subprocess.run(
-                ["git", "archive", "HEAD", "src"], cwd=ROOT, capture_output=True, check=True
-            ).stdout
-            subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
-            if mutate:
-                operator_class = cosmic_ray.plugins.get_operator(mutation.operator_name)
-                apply_mutation(tree / MODULES[name].source, operator_class(), mutation.occurrence)
-            env = _env() | {"PYTHONPATH": os.pathsep.join([str(tree / "src"), str(ROOT)])}
+    archive, outcomes = _committed_src(), []
+    for applied in (None, mutation):
+        with tempfile.TemporaryDirectory() as tmp:
+            env = _tree(Path(tmp), archive, MODULES[name].source, applied)
             outcomes.append(subprocess.run(command, cwd=ROOT, env=env, capture_output=True))
     passed, failed = (o.returncode for o in outcomes)
     print(
@@ -579,8 +589,6 @@ def sample(name: str, seed: int, slow: float, wanted: int) -> None:
     import random
     import time
 
-    import cosmic_ray.plugins
-    from cosmic_ray.mutating import apply_mutation
     from cosmic_ray.work_db import WorkDB, use_db
 
     if not (WORK / f"{name}.sqlite").exists():
@@ -593,18 +601,12 @@ def sample(name: str, seed: int, slow: float, wanted: int) -> None:
     module = MODULES[name]
     command = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", "-x"]
     command += ["--hypothesis-seed=0", *module.tests]
-    archive = subprocess.run(
-        ["git", "archive", "HEAD", "src"], cwd=ROOT, capture_output=True, check=True
-    ).stdout
-    count = 0
+    archive, count = _committed_src(), 0
     for mutation in specs:
         if count >= wanted:
             break
         with tempfile.TemporaryDirectory() as tmp:
-            subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
-            operator = cosmic_ray.plugins.get_operator(mutation.operator_name)()
-            apply_mutation(Path(tmp) / module.source, operator, mutation.occurrence)
-            env = _env() | {"PYTHONPATH": os.pathsep.join([str(Path(tmp) / "src"), str(ROOT)])}
+            env = _tree(Path(tmp), archive, module.source, mutation)
             start = time.monotonic()
             tests = subprocess.Popen(
                 command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, start_new_session=True

@@ -19,7 +19,7 @@ import numpy as np
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
 from perga.case.placement import comb, held, initial_spins, initial_state
-from perga.case.schema import Case, CombPlacement
+from perga.case.schema import Case, CombPlacement, ContactPair
 from perga.case.sizes import initial_radii, masses, mean_mass, quantile_table
 from perga.case.timestep import pair_stiffness, step_plan, tangential_ratio
 from perga.geometry.polygon import vertex_tuples
@@ -100,6 +100,21 @@ def _effects(case: Case) -> EffectsSpec:
         drive=(
             DriveSpec(case.rotor.inertia, case.rotor.torque_limit) if fx.rotor_inertia else None
         ),
+    )
+
+
+def _contact(case: Case, pair: ContactPair) -> ContactSpec:
+    """A [[contacts]] entry; soft contacts with the pair's stiffness and k_t/k_n."""
+    a, b = pair.pair
+    if not case.contact_model.soft:
+        return ContactSpec(a, b, pair.restitution, pair.friction)
+    return ContactSpec(
+        a,
+        b,
+        pair.restitution,
+        pair.friction,
+        pair_stiffness(case, a, b),
+        tangential_ratio(case, a, b),
     )
 
 
@@ -217,21 +232,7 @@ def scene_spec(case: Case) -> SceneSpec:
     pairs.add(frozenset((case.granules.material, case.chamber.material)))
     if case.effects.granule_collisions:
         pairs.add(frozenset((case.granules.material,)))
-    contacts = tuple(
-        ContactSpec(
-            c.pair[0],
-            c.pair[1],
-            c.restitution,
-            c.friction,
-            *(
-                (pair_stiffness(case, *c.pair), tangential_ratio(case, *c.pair))
-                if case.contact_model.soft
-                else ()
-            ),
-        )
-        for c in case.contacts
-        if frozenset(c.pair) in pairs
-    )
+    contacts = tuple(_contact(case, c) for c in case.contacts if frozenset(c.pair) in pairs)
     gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
     plan = step_plan(case)
     return SceneSpec(
