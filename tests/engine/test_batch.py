@@ -195,13 +195,13 @@ def test_granule_missing_from_space_is_an_error() -> None:
 def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
     reader = BodyReader(*_parts(scene))
-    real = state_module.pb.get_space_bodies
+    real = state_module._BatchBuffer.get
 
-    def short(space: pymunk.Space, fields: object, buffer: object) -> None:
-        real(space, fields, buffer)
-        buffer._float_arr.num -= 1  # one float missing, as a changed layout would give
+    def short(self: object, space: pymunk.Space, fields: object) -> tuple:
+        ids, floats = real(self, space, fields)
+        return ids, floats[:-1]  # one float missing, as a changed layout would give
 
-    monkeypatch.setattr(state_module.pb, "get_space_bodies", short)
+    monkeypatch.setattr(state_module._BatchBuffer, "get", short)
     with pytest.raises(RuntimeError, match="expected 2 per body"):
         reader.positions()
 
@@ -312,13 +312,13 @@ def test_writer_short_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> Non
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
     writer = BodyWriter(*_parts(scene))
     v, _ = writer.read_internal(positions=False)
-    real = state_module.pb.get_space_bodies
+    real = state_module._BatchBuffer.get
 
-    def short(space: pymunk.Space, fields: object, buffer: object) -> None:
-        real(space, fields, buffer)
-        buffer._float_arr.num -= 1
+    def short(self: object, space: pymunk.Space, fields: object) -> tuple:
+        ids, floats = real(self, space, fields)
+        return ids, floats[:-1]
 
-    monkeypatch.setattr(state_module.pb, "get_space_bodies", short)
+    monkeypatch.setattr(state_module._BatchBuffer, "get", short)
     before = _everything(scene)
     with pytest.raises(RuntimeError, match="expected 2 per body"):
         writer.write_internal_velocities(v)
@@ -330,15 +330,15 @@ def test_writer_checks_the_write_layout(monkeypatch: pytest.MonkeyPatch, fault: 
     """A set_space_bodies that writes nothing, or writes every body's row one body later (as a
     changed layout would), fails the writer's construction check."""
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
-    real = state_module.pb.set_space_bodies
+    real = state_module._BatchBuffer.set
 
-    def faulty(space: pymunk.Space, fields: object, buffer: pymunk.batch.Buffer) -> None:
+    def faulty(self: state_module._BatchBuffer, space: pymunk.Space, fields: object) -> None:
         if fault == "shifted":
-            floats = np.frombuffer(buffer.float_buf(), dtype=np.float64)
+            floats = np.frombuffer(self.buffer.float_buf(), dtype=np.float64)
             floats[:] = np.roll(floats, 2)
-            real(space, fields, buffer)
+            real(self, space, fields)
 
-    monkeypatch.setattr(state_module.pb, "set_space_bodies", faulty)
+    monkeypatch.setattr(state_module._BatchBuffer, "set", faulty)
     with pytest.raises(RuntimeError, match="set_space_bodies check failed"):
         BodyWriter(*_parts(scene))
 

@@ -140,22 +140,29 @@ def restore(space: pymunk.Space, state: ChipmunkState) -> None:
 class JointImpulses:
     """The accumulated impulses of joints (jAcc: a PivotJoint's J, (x, y), applied +J to its
     body b and −J to a; a SimpleMotor's or RotaryLimitJoint's angular j, +j on b), read raw
-    after every step: the layout is checked at the first read, then each read is one or two
-    doubles a joint. Pickled as the joints alone (the pointers are taken again)."""
+    after every step: the layout is checked at the first read, which also makes a numpy view of
+    each joint's jAcc in Chipmunk's memory (held while the joints are); then each read is one
+    concatenation of the views. Pickled as the joints alone (the views are made again)."""
 
     def __init__(self, joints: list[pymunk.Constraint]) -> None:
         self.joints = joints
-        self._raw: list[tuple[object, int, int]] | None = None
+        self._views: list[NDArray[np.float64]] | None = None
 
     def __getstate__(self) -> dict[str, object]:
         return {"joints": self.joints}
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
-        self._raw = None
+        self._views = None
 
     def read(self) -> NDArray[np.float64]:
         """Every joint's jAcc, one after the other (two doubles for a pivot), internal units."""
-        if self._raw is None:
-            self._raw = [(_doubles(j._constraint), *_joint_layout(j)) for j in self.joints]
-        return np.array([raw[first + k] for raw, first, length in self._raw for k in range(length)])
+        if self._views is None:
+            self._views = [_view(j, *_joint_layout(j)) for j in self.joints]
+        return np.concatenate(self._views) if self._views else np.zeros(0)
+
+
+def _view(joint: pymunk.Constraint, first: int, length: int) -> NDArray[np.float64]:
+    """The doubles first:first + length of ``joint``'s C struct, a writable view."""
+    raw = _doubles(joint._constraint)
+    return np.frombuffer(ffi.buffer(raw + first, length * ffi.sizeof("double")), dtype=np.float64)
