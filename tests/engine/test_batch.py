@@ -183,6 +183,23 @@ def test_survives_reordering_of_chipmunks_body_array() -> None:
     assert not np.array_equal(reader._rows, rows)  # the rows did move
 
 
+def test_reads_stay_exact_when_the_buffer_grows() -> None:
+    """The reader's numpy views of the batch buffer's C arrays are made again when a fetch
+    reallocates them: after bodies are added (the arrays grow), a read is still the loop's."""
+    sim = Simulation(_spec(n_rings=1))
+    reader = BodyReader(*_parts(sim.contacts.bodies))
+    _assert_same(Kinematics(*reader.read()), _loop(sim))
+    pointers = reader._buffer._pointers
+    space = sim.machine.space
+    for k in range(4 * len(space.bodies)):
+        extra = pymunk.Body(1.0, 1.0)
+        extra.position = (float(k), -1.0)
+        space.add(extra)
+    sim.run(2e-4)
+    _assert_same(Kinematics(*reader.read()), _loop(sim))
+    assert reader._buffer._pointers != pointers  # the arrays were reallocated
+
+
 def test_granule_missing_from_space_is_an_error() -> None:
     scene = attach_bodies(build_machine(_spec(n_rings=1)))
     reader = BodyReader(*_parts(scene))
