@@ -60,7 +60,7 @@ class _Kinematics:
         return self._g.v / u.VELOCITY, self._g.x / u.LENGTH if positions else None
 
     def write_internal_velocities(self, velocities: FloatArray) -> None:
-        self._g.v[:] = velocities * u.VELOCITY
+        np.multiply(velocities, u.VELOCITY, out=self._g.v)  # in place: no temporary
 
 
 class SoftContacts:
