@@ -96,7 +96,7 @@ class _BatchBuffer:
         self._floats = np.zeros(0)
 
     def _argument(self, fields: pb.BodyFields) -> object:
-        key = fields._value_  # the member's own attribute: ``value`` is a slower descriptor
+        key = fields.value
         argument = self._arguments.get(key)
         if argument is None:
             argument = ffi.new("pmBatchedData *")
