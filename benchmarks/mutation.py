@@ -116,6 +116,26 @@ _DEAD_SLID = (
     " = 0 makes c_t = 0 and F_t = 0)"
 )
 _FLAG = "a flag: every reader of P_HERTZ and P_CLAMP tests it against 0"
+
+
+def _cache_flags(
+    module: str, decorator: str, column: int, lines: tuple[int, ...], first: int = 0
+) -> dict[tuple[str, int, int, str], tuple[str, str]]:
+    """EQUIVALENT entries for ``cache=True`` turned False in ``decorator`` at each of ``lines``
+    (cosmic-ray numbers these mutants ReplaceTrueWithFalse#k in line order, from ``first``)."""
+    return {
+        (module, line, column, f"ReplaceTrueWithFalse#{first + k}"): (decorator, _NUMBA_CACHE)
+        for k, line in enumerate(lines)
+    }
+
+
+_CACHE_FLAGS_LAWS = _cache_flags(
+    "laws",
+    '@njit(cache=True, inline="always", fastmath=FASTMATH)',
+    12,
+    (68, 79, 114, 134, 169, 176, 186, 196, 209, 242),
+)
+_CACHE_FLAGS_ENERGY = _cache_flags("energy", "@numba.njit(cache=True)", 18, (187, 210), 2)
 EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
     ("impact", 55, 53, "ReplaceComparisonOperator_LtE_Lt#0"): (
         _CHECK_INERTIA,
@@ -319,14 +339,7 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
         "for b, r0 in zip(self._bodies, self._centres0, strict=True)",
         _ZIP_BODIES,
     ),
-    ("energy", 187, 18, "ReplaceTrueWithFalse#2"): (
-        "@numba.njit(cache=True)",
-        _NUMBA_CACHE,
-    ),
-    ("energy", 210, 18, "ReplaceTrueWithFalse#3"): (
-        "@numba.njit(cache=True)",
-        _NUMBA_CACHE,
-    ),
+    **_CACHE_FLAGS_ENERGY,
     ("laws", 54, 11, "NumberReplacer#2"): (
         "N_PARAMS = 8",
         (
@@ -334,46 +347,7 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
             "by N_PARAMS, columns read by their P_* index"
         ),
     ),
-    ("laws", 68, 12, "ReplaceTrueWithFalse#0"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 79, 12, "ReplaceTrueWithFalse#1"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 114, 12, "ReplaceTrueWithFalse#2"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 134, 12, "ReplaceTrueWithFalse#3"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 169, 12, "ReplaceTrueWithFalse#4"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 176, 12, "ReplaceTrueWithFalse#5"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 186, 12, "ReplaceTrueWithFalse#6"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 196, 12, "ReplaceTrueWithFalse#7"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 209, 12, "ReplaceTrueWithFalse#8"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
-    ("laws", 242, 12, "ReplaceTrueWithFalse#9"): (
-        '@njit(cache=True, inline="always", fastmath=FASTMATH)',
-        _NUMBA_CACHE,
-    ),
+    **_CACHE_FLAGS_LAWS,
     ("laws", 76, 42, "ReplaceComparisonOperator_Gt_GtE#0"): (
         "return delta + 0.5 * dt * abs(ddelta) > 0.0",
         (
