@@ -11,9 +11,11 @@ import pytest
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
 from perga.contact.soft.kernel import DISSIPATED_PAIRS, DISSIPATED_POLYGONS
+from perga.contact.soft.polygon_forces import candidates
 from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
+    HIST_COLUMNS,
     HIST_DISSIPATED,
     HIST_NORMAL_IMPULSE,
     HIST_TANGENTIAL_IMPULSE,
@@ -22,7 +24,7 @@ from perga.contact.soft.polygon_set import (
     contact_table,
     polygon_set,
 )
-from perga.geometry.disc_polygon import closest_feature
+from perga.geometry.disc_polygon import bounding_radii, closest_feature, separation
 
 from .test_polygons import (
     I_DISC,
@@ -316,6 +318,50 @@ def test_every_overlap_is_a_contact_with_a_fast_polygon():
         assert np.all(g.polygon_hist[deep, 0, HIST_ACTIVE] == 1.0)
         checked += np.count_nonzero(deep)
     assert checked > 30
+
+
+def test_candidate_list_holds_exactly_the_pairs_its_rule_lets_in():
+    """``candidates`` against the rule of its doc, pair by pair in plain Python: a pair is in
+    when its contact is active, when the polygon turns so fast that 1 − ½ dt|ω| ≤ 0, or when
+    both lower bounds of the gap from x_ref (the bounding circle's and the edge lines') are
+    below r_i + reach/(1 − ½ dt|ω|). 300 discs strewn over and around three polygons (one
+    spinning past that limit), a fifth of the pairs flagged active wherever they are (the far
+    ones test that no active contact is left unevaluated). The lists are compared exactly:
+    every entry and the order, granule then polygon."""
+    rng = np.random.default_rng(7)
+    shapes = [_box(0.03, 0.004), _hexagon(0.008, (0.02, 0.01)), _box(0.01, 0.01, -0.02, 0.0)]
+    dt, skin, span = 1e-6, 0.4 * R, 5e-6
+    velocity = np.array([[2.0, 0.0], [0.0, -1.0], [0.0, 0.0]])
+    omega = np.array([500.0, -200.0, 3e6])  # the last: 1 - dt|ω|/2 < 0
+    polys = polygon_set(
+        shapes, np.array([s.mean(axis=0) for s in shapes]), kind=[KINEMATIC] * 3,
+        velocity=velocity, omega=omega,
+    )  # fmt: skip
+    poly = polys.arrays()
+    x = rng.uniform(-0.05, 0.05, (300, 2))
+    r = np.full(300, R)
+    hist = np.zeros((300, 3, HIST_COLUMNS))
+    hist[:, :, HIST_ACTIVE] = rng.random((300, 3)) < 0.2
+    rho = bounding_radii(poly.vertices, poly.start, poly.com)
+    start, listed = candidates(x, r, poly, rho, hist, span, skin, dt)
+    expected = []
+    for i in range(300):
+        for k in range(3):
+            top = np.hypot(*velocity[k]) + abs(omega[k]) * rho[k]
+            slack = 1.0 - 0.5 * dt * abs(omega[k])
+            limit = r[i] + (0.5 * skin + top * (span + 0.5 * dt)) / max(slack, 1e-300)
+            near = np.hypot(*(x[i] - poly.com[k])) - rho[k] < limit and (
+                separation(x[i, 0], x[i, 1], poly.vertices, poly.start[k], poly.start[k + 1])
+                < limit
+            )
+            if hist[i, k, HIST_ACTIVE] or slack <= 0.0 or near:
+                expected.append((i, k))
+    got = [(i, int(k)) for i in range(300) for k in listed[start[i] : start[i + 1]]]
+    assert got == expected
+    far_active = sum(
+        1 for i, k in expected if hist[i, k, HIST_ACTIVE] and k < 2 and np.hypot(*x[i]) > 0.045
+    )
+    assert far_active > 5 and len(expected) < 0.6 * 900
 
 
 def test_one_and_two_threads_give_identical_results():

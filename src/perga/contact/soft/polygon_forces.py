@@ -295,20 +295,20 @@ def _polygon_contacts(discs, poly, table, dt, hist, f, tq, loads):
 
 
 @nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
+def _candidate(i, k, x_ref, r, poly, rho, hist, reach):
     """Whether pair (i, k) goes in the candidate list: in contact, or (1 − ½ dt|ω|)(d − r_i) <
-    reach[k] (``candidates``), d the separation from the polygon's edge lines (a lower bound of
+    its reach (``candidates``), d the separation from the polygon's edge lines (a lower bound of
     the distance, so that a piece whose features do not count here now is still listed);
-    slack[k] = 1 − ½ dt|ω_k|."""
-    if hist[i, k, HIST_ACTIVE] != 0.0 or slack[k] <= 0.0:
-        return True
+    reach[k] = that reach / (1 − ½ dt|ω_k|), m (inf where 1 − ½ dt|ω_k| ≤ 0: every pair in)."""
     px = x_ref[i, 0]
     py = x_ref[i, 1]
-    limit = r[i] + reach[k] / slack[k]
+    limit = r[i] + reach[k]
     dx = px - poly.com[k, 0]
     dy = py - poly.com[k, 1]
     if dx * dx + dy * dy >= (rho[k] + limit) ** 2:  # outside the bounding circle: cheap reject
-        return False
+        return hist[i, k, HIST_ACTIVE] != 0.0
+    if hist[i, k, HIST_ACTIVE] != 0.0:
+        return True
     return separation(px, py, poly.vertices, poly.start[k], poly.start[k + 1]) < limit
 
 
@@ -327,31 +327,33 @@ def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
     |v_i| + |v_c| + |ω|(ρ + g)) only if (1 − ½ dt|ω|) g < ½ dt (|v_i| + |v_c| + |ω| ρ). So with
     g measured from x_ref to the polygon now, pairs with (1 − ½ dt|ω|) g ≥ ½ skin + S·span +
     ½ dt (|v_c| + |ω| ρ) are left out. Pairs in contact (``HIST_ACTIVE``) are always in, so that
-    their end is evaluated.
+    their end is evaluated. One pass over the pairs: row i of a scratch (n, n_poly) array takes
+    granule i's entries, then the rows are gathered.
     """
     n = x_ref.shape[0]
     velocity, omega = poly.velocity, poly.omega
     n_poly = omega.shape[0]
     reach = np.empty(n_poly)
-    slack = np.empty(n_poly)
     for k in range(n_poly):
         top = math.sqrt(velocity[k, 0] ** 2 + velocity[k, 1] ** 2) + abs(omega[k]) * rho[k]
-        reach[k] = 0.5 * skin + top * (span + 0.5 * dt)
-        slack[k] = 1.0 - 0.5 * dt * abs(omega[k])
-    start = np.zeros(n + 1, np.int64)
+        slack = 1.0 - 0.5 * dt * abs(omega[k])
+        reach[k] = (0.5 * skin + top * (span + 0.5 * dt)) / slack if slack > 0.0 else math.inf
+    found = np.empty((n, n_poly), np.int32)
+    count = np.empty(n, np.int64)
     for i in nb.prange(n):
+        q = 0
         for k in range(n_poly):
-            if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
-                start[i + 1] += 1
-    for i in range(n):
-        start[i + 1] += start[i]
-    cpoly = np.empty(start[n], np.int64)
-    for i in nb.prange(n):
-        q = start[i]
-        for k in range(n_poly):
-            if _candidate(i, k, x_ref, r, poly, rho, hist, reach, slack):
-                cpoly[q] = k
+            if _candidate(i, k, x_ref, r, poly, rho, hist, reach):
+                found[i, q] = k
                 q += 1
+        count[i] = q
+    start = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        start[i + 1] = start[i] + count[i]
+    cpoly = np.empty(start[n], np.int64)
+    for i in range(n):  # not a slice copy: numba would make each a parallel region
+        for q in range(count[i]):
+            cpoly[start[i] + q] = found[i, q]
     return start, cpoly  # not a Candidates with its loads: slower (docs/performance.md)
 
 
