@@ -78,7 +78,6 @@ def test_plain_tuples_for_advance_follow_the_field_order():
         g.steps,
     )
     assert named.gravity is g.gravity and named.pairs is True and named.rebuild is True
-    assert named.threaded is (g.threads > 1)
     _same(kernel.Granules(*state), g)
     _same(kernel.GranuleProps(*props), g)
     _same(kernel.Bonds(*bonds), g)

@@ -356,7 +356,9 @@ class SoftGranules:
         if switch:
             numba.set_num_threads(self.threads)
         try:
-            self.start, self.nbr, self.hist, rebuilt = kernel.advance(
+            threaded = self.threads > 1 and self._acc.shape[0] > 1
+            advance = kernel.advance_threaded if threaded else kernel.advance
+            self.start, self.nbr, self.hist, rebuilt = advance(
                 *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap))
             )
         finally:
@@ -391,7 +393,6 @@ class SoftGranules:
                 self.pairs,
                 self._rebuild,
                 self.steps,
-                self.threads > 1,
             ),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),

@@ -62,11 +62,12 @@ bundles, only read there, are passed whole.
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i, each accumulating into
 its own slice of ``acc``, summed per granule afterwards in chunk order, so each pair is computed
 once and no two threads write the same memory (no races). The chunks fix every sum's order, so
-the results depend on n_chunks and never on the threads (``perga.contact.soft.threads``). On
-one thread the pair and per-granule passes take the chunks one after the other in functions
-without a parallel region (``_pair_forces_serial``, ``_integrate_serial``), with the same
-arithmetic: opening a region costs microseconds per step even on one thread, which a small
-system pays many times over (docs/performance.md).
+the results depend on n_chunks and never on the threads (``perga.contact.soft.threads``).
+``advance_threaded`` computes the chunks on numba's threads; ``advance``, on one thread, takes
+them one after the other in functions without a parallel region (``_pair_forces_serial``,
+``_integrate_serial``), with the same arithmetic: opening a region costs microseconds per step
+even on one thread, which a small system pays many times over. Both share one body
+(``_advance``, inlined), so each compiles only its own passes (docs/performance.md).
 Everything else is per granule; polygon loads and their dissipation are summed per
 candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
 depend on the number of threads.
@@ -198,8 +199,7 @@ class Work(NamedTuple):
 class Settings(NamedTuple):
     """The call's scalars: n_steps; dt, s; gravity (2,), m/s²; skin, m; drag, 1/s; v_cap, m/s;
     pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first; first_step:
-    the number of steps taken before the call; threaded: more than one thread computes the
-    chunks (else one thread takes them one after the other, without a parallel region)."""
+    the number of steps taken before the call."""
 
     n_steps: int
     dt: float
@@ -210,7 +210,6 @@ class Settings(NamedTuple):
     pairs: bool
     rebuild: bool
     first_step: int
-    threaded: bool
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -615,8 +614,8 @@ def _motion_of(i, x, v, a_prev, x_ref, h):
 
 @njit(cache=True)
 def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
-    """Advance settings.n_steps symplectic Euler steps; returns (start, nbr, hist, n_rebuilds),
-    the neighbour list after the call and the number of rebuilds.
+    """Advance settings.n_steps symplectic Euler steps on one thread; returns (start, nbr, hist,
+    n_rebuilds), the neighbour list after the call and the number of rebuilds.
 
     The bundles are those of the module doc; each may also be a plain tuple in its fields' order
     (``tuple(bundle)``, for ``Polygons`` its parts too): numba types a named-tuple argument by
@@ -637,6 +636,29 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     and their loads the mean force, torque and moment over the call; work.dissipated has been
     added to.
     """
+    return _advance(
+        settings, granules, props, bonds, params, walls, polygons, nbrs, work,
+        _pair_forces_serial, _integrate_serial,
+    )  # fmt: skip
+
+
+@njit(cache=True)
+def advance_threaded(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
+    """``advance`` with the chunks of work.acc computed on numba's threads."""
+    return _advance(
+        settings, granules, props, bonds, params, walls, polygons, nbrs, work, pair_forces,
+        _integrate,
+    )  # fmt: skip
+
+
+@njit(inline="always")
+def _advance(
+    settings, granules, props, bonds, params, walls, polygons, nbrs, work, pair_pass,
+    integrate_pass,
+):  # fmt: skip
+    """The body of ``advance`` with its pair pass (``pair_forces`` or ``_pair_forces_serial``)
+    and per-granule pass (``_integrate`` or ``_integrate_serial``); inlined into each entry, so
+    that each compiles only the passes it calls."""
     settings = Settings(*settings)
     granules = Granules(*granules)
     props = GranuleProps(*props)
@@ -659,7 +681,6 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     dissipated = work.dissipated
     n = x.shape[0]
     n_chunks = work.acc.shape[0]
-    threaded = n_chunks > 1 and settings.threaded
     n_poly = force.shape[0]
     origin = Pose(poly.vertices.copy(), poly.com.copy(), poly.pivot.copy())
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
@@ -691,26 +712,15 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
                 cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
-        if pairs and threaded:
-            pair_forces(
+        if pairs:
+            pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
                 start, nbr, hist, dt, reach, tangential, work.acc, lost,
             )  # fmt: skip
-        elif pairs:
-            _pair_forces_serial(
-                x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, reach, tangential, work.acc, lost,
-            )  # fmt: skip
-        if threaded:
-            _integrate(
-                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-                settings, work, x_ref, chunk, settings.first_step + step, reach,
-            )  # fmt: skip
-        else:
-            _integrate_serial(
-                granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-                settings, work, x_ref, chunk, settings.first_step + step, reach,
-            )  # fmt: skip
+        integrate_pass(
+            granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
+            settings, work, x_ref, chunk, settings.first_step + step, reach,
+        )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
         dmax = 0.0
