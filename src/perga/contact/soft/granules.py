@@ -320,7 +320,7 @@ class SoftGranules:
 
     def _resized(self) -> None:
         """After ``add``/``remove``: the accumulator, and the skin if it is the default."""
-        self._acc = kernel.new_accumulator(self.threads, self.n)
+        self._acc = kernel.new_accumulator(self.chunks, self.n)
         if self._default_skin and self.n:
             skin = default_skin(self.r)
             if skin != self.skin:
