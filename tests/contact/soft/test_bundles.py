@@ -94,7 +94,7 @@ def test_plain_tuples_for_advance_follow_the_field_order():
     assert named.hist is g.hist and named.x_ref is g.x_ref
     named = kernel.Work(*work)
     assert named.acc is g._acc and named.f is g.f and named.tq is g.tq
-    assert named.dissipated is g.dissipated
+    assert named.dissipated is g.dissipated and named.counts is g.counts
 
 
 def test_advance_takes_named_or_plain_bundles_alike():

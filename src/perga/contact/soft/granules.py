@@ -87,7 +87,10 @@ class SoftGranules:
     moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
     ``polygon_set.HIST_COLUMNS``) is the granule-polygon contact history, impact totals included;
     ``dissipated`` (3,) the energy the contact laws dissipated since the start (or ``relax``),
-    J: [granule pairs, walls, polygons] (``kernel.DISSIPATED_*``).
+    J: [granule pairs, walls, polygons] (``kernel.DISSIPATED_*``); ``counts`` (2,) int64 the
+    granule-polygon contacts opened or closed (a ``HIST_ACTIVE`` flag changed) and the granules
+    released since the start (``kernel.COUNT_*``): a step that left them as they were changed
+    no contact flag and released nothing.
     """
 
     def __init__(
@@ -152,6 +155,7 @@ class SoftGranules:
         self._no_polygons = no_polygons()
         self.polygon_hist = np.zeros((n, self._poly[0].n_poly, HIST_COLUMNS))
         self.dissipated = np.zeros(3)
+        self.counts = np.zeros(2, np.int64)
         self.held = np.zeros(n, np.int8) if held is None else _held(held, n)
         self.bond_force = np.full(n, math.inf) if bond_force is None else _f64(bond_force, (n,))
         self.released_step = np.full(n, -1, np.int64)
@@ -401,7 +405,7 @@ class SoftGranules:
             (self.walls, self.wall_hist),
             polygons,
             (self.start, self.nbr, self.hist, self.x_ref),
-            (self._acc, self.f, self.tq, self.dissipated),
+            (self._acc, self.f, self.tq, self.dissipated, self.counts),
         )
 
     # --- diagnostics (NumPy, not per step) -------------------------------------------------
@@ -603,6 +607,9 @@ class SoftGranules:
         self.w[:] = 0.0
         self.hist[:] = 0.0
         self.wall_hist[:] = 0.0
+        self.counts[kernel.COUNT_CONTACT_CHANGES] += np.count_nonzero(
+            self.polygon_hist[:, :, HIST_ACTIVE]
+        )
         self.polygon_hist[:] = 0.0
         self.dissipated[:] = 0.0
         self.time = 0.0

@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 from perga.contact.soft import SoftGranules
+from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
 from perga.contact.soft.polygon_set import (
     HIST_ACTIVE,
     HIST_DISSIPATED,
@@ -81,6 +82,7 @@ class SoftImpactLog:
         self._hammer_of = hammer_of
         self._hammer_state = hammer_state
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        self._seen = int(granules.counts[COUNT_CONTACT_CHANGES])
         self._changes = np.empty((0, 3), dtype=np.int64)
         self._is_hammer = hammer_of >= 0
         self._open: dict[tuple[int, int], _Start] = {}  # (granule id, polygon)
@@ -133,8 +135,13 @@ class SoftImpactLog:
 
     def after(self, time: float, angles: np.ndarray) -> None:
         """Open and close impacts after a kernel call; ``time``: end of the step, s;
-        ``angles``: each hammer's body angle now, rad."""
+        ``angles``: each hammer's body angle now, rad. The flags are compared only when the
+        kernel counted a change since the last look (``SoftGranules.counts``)."""
         g = self._g
+        seen = int(g.counts[COUNT_CONTACT_CHANGES])
+        if seen == self._seen:
+            return
+        self._seen = seen
         hist = g.polygon_hist
         if self._changes.shape[0] < self._active.size:
             self._changes = np.empty((self._active.size, 3), dtype=np.int64)

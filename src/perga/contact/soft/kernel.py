@@ -17,7 +17,7 @@ which numba compiles as tuples with attribute access):
 * ``NeighbourList``: the half list start, nbr, hist (``perga.contact.soft.neighbours``) and the
   positions x_ref (n, 2) it was built at;
 * ``Work``: the per-chunk force accumulator acc (n_chunks, n, 3), the contact forces f (n, 2)
-  and torques tq (n,) of the last step, the dissipated energies (3,);
+  and torques tq (n,) of the last step, the dissipated energies (3,) and the event counts (2,);
 * ``Settings``: n_steps, dt (s), gravity (2,) m/s², skin (m), drag (1/s), v_cap (m/s), pairs,
   rebuild, first_step (the count of steps before the call).
 
@@ -104,7 +104,7 @@ from perga.contact.soft.polygon_forces import (
     polygon_contact,
     pose,
 )
-from perga.contact.soft.polygon_set import PolygonArrays, PolygonLoads, TableArrays
+from perga.contact.soft.polygon_set import HIST_ACTIVE, PolygonArrays, PolygonLoads, TableArrays
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
@@ -125,6 +125,9 @@ WALL_COLUMNS = 6
 
 DISSIPATED_PAIRS, DISSIPATED_WALLS, DISSIPATED_POLYGONS = 0, 1, 2
 """Entries of the (3,) dissipated-energy totals ``Work.dissipated``, J."""
+COUNT_CONTACT_CHANGES, COUNT_RELEASES = 0, 1
+"""Entries of the (2,) running counts ``Work.counts``: granule-polygon contacts opened or
+closed (a contact's ``HIST_ACTIVE`` flag changed), granules released from their bonds."""
 
 
 class Granules(NamedTuple):
@@ -188,12 +191,14 @@ class NeighbourList(NamedTuple):
 class Work(NamedTuple):
     """Arrays the kernel writes: acc (n_chunks, n, 3) per-chunk pair forces and torques (N, N·m;
     ``new_accumulator``); f (n, 2), N, and tq (n,), N·m: the last step's contact forces and
-    torques; dissipated (3,): energy dissipated, J, added to (``DISSIPATED_*``)."""
+    torques; dissipated (3,): energy dissipated, J, added to (``DISSIPATED_*``); counts (2,)
+    int64: contact changes and releases, added to (``COUNT_*``)."""
 
     acc: np.ndarray
     f: np.ndarray
     tq: np.ndarray
     dissipated: np.ndarray
+    counts: np.ndarray
 
 
 class Settings(NamedTuple):
@@ -464,8 +469,8 @@ def _integrate_range(
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
     fields, cand's) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap, step, reach) (a tuple:
     a call of more than 30 arguments compiles to one numba cannot inline); returns the range's
-    (max displacement², max speed², wall dissipation, max extrapolated speed²)
-    (``_integrate``)."""
+    (max displacement², max speed², wall dissipation, max extrapolated speed², polygon contacts
+    opened or closed, granules released) (``_integrate``)."""
     dt, damp, v_cap, step, reach = scalars
     n_chunks = acc.shape[0]
     h = 0.5 * dt
@@ -473,6 +478,8 @@ def _integrate_range(
     smax = 0.0
     umax = 0.0
     lost = 0.0
+    changes = 0
+    releases = 0
     for i in range(lo, hi):
         fx, fy, t, de = wall_force(
             i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
@@ -483,9 +490,11 @@ def _integrate_range(
             fy += acc[q, i, 1]
             t += acc[q, i, 2]
         for e in range(cstart[i], cstart[i + 1]):
-            _, px, py, ti, tk, de = polygon_contact(
+            was = phist[i, cpoly[e], HIST_ACTIVE] != 0.0
+            now, px, py, ti, tk, de = polygon_contact(
                 i, cpoly[e], x, v, w, r, m, mat, poly, table, rho, dt, phist
             )
+            changes += now != was
             fx += px
             fy += py
             t += ti
@@ -509,12 +518,13 @@ def _integrate_range(
             held[i] = 0
             released_step[i] = step
             release_force[i] = load
+            releases += 1
         _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
         d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
-    return dmax, smax, lost, umax
+    return dmax, smax, lost, umax, changes, releases
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -526,7 +536,8 @@ def _integrate(
 
     Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
     displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J), max
-    extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²)) of chunk c (per-chunk
+    extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²), polygon contacts opened
+    or closed, granules released) of chunk c (per-chunk
     values instead of shared reduction variables). Polygon contacts: the candidate
     pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
@@ -548,7 +559,7 @@ def _integrate(
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
-        dmax, smax, lost, umax = _integrate_range(
+        dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
             params, rows, wall_hist, acc, f, tq, held, bond_force, released_step, release_force,
             poly, table, phist, rho, cstart, cpoly, ploads, x_ref, gravity,
@@ -558,6 +569,8 @@ def _integrate(
         chunk[c, 1] = smax
         chunk[c, 2] = lost
         chunk[c, 3] = umax
+        chunk[c, 4] = changes
+        chunk[c, 5] = releases
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
@@ -573,7 +586,7 @@ def _integrate_serial(
     n = x.shape[0]
     n_chunks = work.acc.shape[0]
     for c in range(n_chunks):
-        dmax, smax, lost, umax = _integrate_range(
+        dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
             params, walls.rows, walls.hist, work.acc, work.f, work.tq, held, bond_force,
             released_step, release_force, poly, table, phist, rho, cand.start, cand.polygon,
@@ -583,6 +596,8 @@ def _integrate_serial(
         chunk[c, 1] = smax
         chunk[c, 2] = lost
         chunk[c, 3] = umax
+        chunk[c, 4] = changes
+        chunk[c, 5] = releases
 
 
 @njit(cache=True)
@@ -633,8 +648,8 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     candidate list (``polygon_forces.candidates``) is built at the first step and after every
     rebuild. On return work.f and work.tq hold the contact forces and torques of the last step,
     granules.a_prev its accelerations, the polygons their pose n_steps·dt after the call's start
-    and their loads the mean force, torque and moment over the call; work.dissipated has been
-    added to.
+    and their loads the mean force, torque and moment over the call; work.dissipated and
+    work.counts have been added to.
     """
     return _advance(
         settings, granules, props, bonds, params, walls, polygons, nbrs, work,
@@ -678,7 +693,7 @@ def _advance(
     start, nbr, hist, x_ref = nbrs.start, nbrs.nbr, nbrs.hist, nbrs.x_ref
     poly, phist, loads = polygons.arrays, polygons.hist, polygons.loads
     force, torque, moment = loads.force, loads.torque, loads.moment
-    dissipated = work.dissipated
+    dissipated, counts = work.dissipated, work.counts
     n = x.shape[0]
     n_chunks = work.acc.shape[0]
     n_poly = force.shape[0]
@@ -687,7 +702,7 @@ def _advance(
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
-    chunk = np.zeros((n_chunks, 4))
+    chunk = np.zeros((n_chunks, 6))
     lost = np.zeros(n_chunks)
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
     n_rebuilds = 0
@@ -732,6 +747,8 @@ def _advance(
             umax = max(umax, chunk[c, 3])
             dissipated[DISSIPATED_PAIRS] += lost[c]
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
+            counts[COUNT_CONTACT_CHANGES] += int(chunk[c, 4])
+            counts[COUNT_RELEASES] += int(chunk[c, 5])
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     if n_poly > 0 and n_steps > 0:
         pose(origin, poly, n_steps * dt)

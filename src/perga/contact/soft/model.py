@@ -32,6 +32,7 @@ from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.soft.build import granule_table_materials, soft_granules
 from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
+from perga.contact.soft.kernel import COUNT_RELEASES
 from perga.contact.soft.machine import MachinePolygons
 from perga.contact.soft.threads import free_cores, kernel_chunks, kernel_threads, numba_threads
 from perga.engine import units as u
@@ -104,6 +105,7 @@ class SoftContacts:
         """Whether any granule, present or fed, is held (else no release to look for)."""
         self.releases: list[Release] = []
         self._reported = np.zeros(g.n, dtype=bool)
+        self._released = -1  # the first look scans: bonds may have broken while building
         self._x0 = g.x.copy()
         self._granule_energy0 = self._granule_energies()
         self._kinetic0 = float(self._granule_energy0.sum())
@@ -148,8 +150,10 @@ class SoftContacts:
         if self.log is not None:
             self.log.after(time, machine.angle[self._hammer_rows])
         g = self.granules
-        if not self._bonds:
+        released = int(g.counts[COUNT_RELEASES])
+        if not self._bonds or released == self._released:
             return self._moment
+        self._released = released
         new = np.flatnonzero((g.released_step >= 0) & ~self._reported)
         for i in new:
             t = (int(g.released_step[i]) + 1) * self.granule_dt
