@@ -10,7 +10,12 @@ import pytest
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
-from perga.contact.soft.kernel import DISSIPATED_PAIRS, DISSIPATED_POLYGONS
+from perga.contact.soft.kernel import (
+    COUNT_CONTACT_CHANGES,
+    COUNT_RELEASES,
+    DISSIPATED_PAIRS,
+    DISSIPATED_POLYGONS,
+)
 from perga.contact.soft.polygon_forces import candidates
 from perga.contact.soft.polygon_set import (
     FREE,
@@ -362,6 +367,37 @@ def test_candidate_list_holds_exactly_the_pairs_its_rule_lets_in():
         1 for i, k in expected if hist[i, k, HIST_ACTIVE] and k < 2 and np.hypot(*x[i]) > 0.045
     )
     assert far_active > 5 and len(expected) < 0.6 * 900
+
+
+def test_counts_follow_the_contact_flags_and_the_releases():
+    """``SoftGranules.counts``: in calls of one step (a flag can change at most once), the
+    contact count grows by the number of HIST_ACTIVE flags that changed: a disc bouncing on a
+    plate, one held pressed into it, one held above it struck by a fourth that breaks its bond
+    and drives it onto the plate; the release count by the bonds that broke; ``relax`` counts the
+    flags it clears. Exact: they are counts."""
+    table, dt = _linear(0.6, friction=0.3)
+    top = 0.002  # the plate's upper face
+    polys = polygon_set([_box(0.06, 2 * top)], np.zeros((1, 2)), kind=[KINEMATIC])
+    x = np.array(
+        [[0.015, top + R + 5e-4], [-0.015, top + R - 1e-6], [0.0, top + R + 5e-4],
+         [0.0, top + 3 * R + 8e-4]]
+    )  # fmt: skip
+    v = np.array([[0.0, -1.0], [0.0, 0.0], [0.0, 0.0], [0.0, -1.0]])
+    g = _granules(x, v, polys, table, dt, gravity=(0.0, -9.81))
+    g.held[1:3] = 1
+    g.bond_force[2] = 0.1
+    changes = 0
+    for _ in range(3000):
+        before = g.polygon_hist[:, :, HIST_ACTIVE].copy()
+        g.step(1)
+        changes += np.count_nonzero(before != g.polygon_hist[:, :, HIST_ACTIVE])
+        assert g.counts[COUNT_CONTACT_CHANGES] == changes
+    assert changes >= 4  # the bouncing disc met the plate and left it, the released one met it
+    assert g.counts[COUNT_RELEASES] == np.count_nonzero(g.released_step >= 0) == 1
+    active = np.count_nonzero(g.polygon_hist[:, :, HIST_ACTIVE])
+    assert active >= 1  # the disc held pressed into the plate
+    g.relax()
+    assert g.counts[COUNT_CONTACT_CHANGES] == changes + active
 
 
 def test_one_and_two_threads_give_identical_results():
