@@ -3,7 +3,9 @@
 timed, over ``--steps`` steps after ``--start`` s of the case, one thread. Before timing, the
 script checks on a second build that its copy of the order moves the simulation exactly as
 ``Simulation.step`` does (bit-identical granule positions after 200 steps), so the phases are
-those of the real step.
+those of the real step. Compiled code first needed inside the timed window (the impact log's
+scan runs only after a step that opened or closed a contact) compiles there on the first run
+after numba's cache was cleared: run it twice after changing compiled code.
 
     python benchmarks/step_phases.py                                 # the soft separator
     python benchmarks/step_phases.py cases/separator.toml --start 0.15
