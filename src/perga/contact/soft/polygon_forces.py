@@ -167,9 +167,10 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
 
     x, v, w, r, m, mat: the granule arrays (``Discs``); poly: ``PolygonArrays`` at the step's
     pose; table: ``TableArrays``; rho: ``bounding_radii`` of the polygons, m; dt: step, s. Returns
-    (evaluated, fx, fy, tq, tq_poly, dissipated): whether the contact was evaluated; force on the
-    granule, N (−it on the polygon); torque on the granule, N·m; torque on the polygon about its
-    centre of mass, N·m; energy dissipated over the step, J.
+    (acting, fx, fy, tq, tq_poly, dissipated): whether the contact acts in the step (its
+    HIST_ACTIVE flag after it); force on the granule, N (−it on the polygon); torque on the
+    granule, N·m; torque on the polygon about its centre of mass, N·m; energy dissipated over
+    the step, J.
     """
     com, pvel, pomega, kind = poly.com, poly.velocity, poly.omega, poly.kind
     pmass, pinertia, pivot, pmat = poly.mass, poly.inertia, poly.pivot, poly.mat
