@@ -32,6 +32,9 @@ Walls: rows ``[kind, a, b, c, d, mat]``:
 * kind WALL_PLANE: half-plane through (a, b) with unit normal (c, d) pointing into the domain.
 
 A wall is a body of infinite mass at rest: its contacts use m_eff = m_i (and I_i for rolling).
+A granule's walls are evaluated only while it can reach one: its gap to the nearest at the
+list's build positions (``wall_gaps``, at a call's first step and after every rebuild) is at
+most its largest displacement since plus the reach (``pair_force``).
 
 Integrator: symplectic Euler with velocity kicks (Hairer, Lubich & Wanner, Geometric Numerical
 Integration, 2006, ch. I): forces from (x, v, w) at step start, then v += (f/m + g) dt,
@@ -435,6 +438,34 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
     return fx, fy, tq, lost
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def wall_gaps(x_ref, r, rows, wall_hist, gap):
+    """Each granule's smallest gap to a wall at the positions x_ref (m; < 0 overlapping) into
+    gap (n,), −inf where a wall contact holds a tangential spring (``Walls``): the rule by which
+    ``_integrate_range`` skips the walls of a granule farther from all of them than it can have
+    moved since x_ref plus the call's reach. The gap is 1-Lipschitz in the position and
+    ``touching`` needs gap < ½ reach, so a skipped granule has no wall force and no spring; the
+    gap is stored 1e-9 r_i short, room for its rounding against ``wall_force``'s."""
+    for i in range(x_ref.shape[0]):
+        g = math.inf
+        for s in range(rows.shape[0]):
+            if wall_hist[i, s] != 0.0:
+                g = -math.inf
+                break
+            if rows[s, 0] == WALL_CHAMBER:
+                dx = x_ref[i, 0] - rows[s, 1]
+                dy = x_ref[i, 1] - rows[s, 2]
+                g = min(g, rows[s, 3] - math.sqrt(dx * dx + dy * dy) - r[i])
+            else:
+                g = min(
+                    g,
+                    (x_ref[i, 0] - rows[s, 1]) * rows[s, 3]
+                    + (x_ref[i, 1] - rows[s, 2]) * rows[s, 4]
+                    - r[i],
+                )
+        gap[i] = g - 1e-9 * r[i]
+
+
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev):
     """Symplectic Euler for granule i (state arrays as in ``Granules``) from its force (fx, fy),
@@ -462,16 +493,17 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _integrate_range(
-    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, acc, f, tq, held,
-    bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly, ploads,
-    x_ref, gravity, scalars,
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, wall_gap, acc, f, tq,
+    held, bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly,
+    ploads, x_ref, scalars,
 ):  # fmt: skip
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
-    fields, cand's) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap, step, reach) (a tuple:
-    a call of more than 30 arguments compiles to one numba cannot inline); returns the range's
-    (max displacement², max speed², wall dissipation, max extrapolated speed², polygon contacts
-    opened or closed, granules released) (``_integrate``)."""
-    dt, damp, v_cap, step, reach = scalars
+    fields, cand's), wall_gap (``wall_gaps``) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap,
+    step, reach, near, gravity) (a tuple: a call of more than 30 arguments compiles to one numba
+    cannot inline): a granule's walls are evaluated only where wall_gap ≤ near; returns the
+    range's (max displacement², max speed², wall dissipation, max extrapolated speed², polygon
+    contacts opened or closed, granules released) (``_integrate``)."""
+    dt, damp, v_cap, step, reach, near, gravity = scalars
     n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
@@ -481,10 +513,14 @@ def _integrate_range(
     changes = 0
     releases = 0
     for i in range(lo, hi):
-        fx, fy, t, de = wall_force(
-            i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
-        )
-        lost += de
+        fx = 0.0
+        fy = 0.0
+        t = 0.0
+        if wall_gap[i] <= near:
+            fx, fy, t, de = wall_force(
+                i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
+            )
+            lost += de
         for q in range(n_chunks):
             fx += acc[q, i, 0]
             fy += acc[q, i, 1]
@@ -530,7 +566,7 @@ def _integrate_range(
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step, reach,
+    chunk, step, reach, wall_gap, near,
 ):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
@@ -543,7 +579,8 @@ def _integrate(
     (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
     entry e's load on its polygon and dissipation go to cand.loads[e]
     (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each granule (module
-    doc); ``step`` is the step's number; reach, m: as in ``pair_force``. The polygon bundles
+    doc); ``step`` is the step's number; reach, m: as in ``pair_force``; the walls of granule i are
+evaluated only where wall_gap[i] ≤ near, m (``wall_gaps``). The polygon bundles
     come as arguments, not as a ``Polygons``: a parallel loop takes a named tuple only from an
     argument or a constructor call (numba 0.68); the other bundles are unpacked before the loop
     (module doc). One chunk runs in ``_integrate_serial`` (no parallel region to open).
@@ -561,9 +598,9 @@ def _integrate(
     for c in prange(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, rows, wall_hist, acc, f, tq, held, bond_force, released_step, release_force,
-            poly, table, phist, rho, cstart, cpoly, ploads, x_ref, gravity,
-            (dt, damp, v_cap, step, reach),
+            params, rows, wall_hist, wall_gap, acc, f, tq, held, bond_force, released_step,
+            release_force, poly, table, phist, rho, cstart, cpoly, ploads, x_ref,
+            (dt, damp, v_cap, step, reach, near, gravity),
         )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
@@ -576,7 +613,7 @@ def _integrate(
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _integrate_serial(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step, reach,
+    chunk, step, reach, wall_gap, near,
 ):  # fmt: skip
     """``_integrate`` on one thread, chunk after chunk, without a parallel region."""
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
@@ -588,9 +625,10 @@ def _integrate_serial(
     for c in range(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, walls.rows, walls.hist, work.acc, work.f, work.tq, held, bond_force,
-            released_step, release_force, poly, table, phist, rho, cand.start, cand.polygon,
-            cand.loads, x_ref, settings.gravity, (settings.dt, damp, settings.v_cap, step, reach),
+            params, walls.rows, walls.hist, wall_gap, work.acc, work.f, work.tq, held,
+            bond_force, released_step, release_force, poly, table, phist, rho, cand.start,
+            cand.polygon, cand.loads, x_ref,
+            (settings.dt, damp, settings.v_cap, step, reach, near, settings.gravity),
         )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
@@ -708,6 +746,8 @@ def _advance(
     n_rebuilds = 0
     dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
     tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
+    wall_gap = np.empty(n)
+    near = 0.0
     need = settings.rebuild or (pairs and start.shape[0] != n + 1)
     need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
@@ -719,6 +759,11 @@ def _advance(
             x_ref[:, :] = x
             n_rebuilds += 1
             fresh = False
+            dmax = 0.0
+        if need or step == 0:
+            wall_gaps(x_ref, r, walls.rows, walls.hist, wall_gap)
+            near = 0.0
+        near = max(near, math.sqrt(dmax) + reach)
         if n_poly > 0:
             if step > 0:
                 pose(origin, poly, step * dt)
@@ -734,7 +779,7 @@ def _advance(
             )  # fmt: skip
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-            settings, work, x_ref, chunk, settings.first_step + step, reach,
+            settings, work, x_ref, chunk, settings.first_step + step, reach, wall_gap, near,
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
