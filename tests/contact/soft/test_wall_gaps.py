@@ -59,9 +59,7 @@ def strike(wall: np.ndarray, x0, v0, calls: int, skin: float) -> SoftGranules:
     ],
     ids=["plane", "chamber"],
 )
-def test_a_strike_from_beyond_the_skin_in_one_call_is_the_strike_step_by_step(
-    wall, x0, v0
-) -> None:
+def test_a_strike_from_beyond_the_skin_in_one_call_is_the_strike_step_by_step(wall, x0, v0) -> None:
     """One call whose list is never rebuilt (skin 1 m): the walls are skipped while the granule
     is far and must be evaluated by the time it arrives, from its displacement since the build.
     Against 24,000 calls of one step with the default skin: equal floats (the kernel is

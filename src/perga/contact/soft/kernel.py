@@ -573,17 +573,17 @@ def _integrate(
     Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
     displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J), max
     extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²), polygon contacts opened
-    or closed, granules released) of chunk c (per-chunk
-    values instead of shared reduction variables). Polygon contacts: the candidate
-    pairs ``cand`` (``Candidates``) of each granule with the posed polygons poly
-    (``PolygonArrays``) of bounding radii rho (m), table (``TableArrays``) and history phist;
-    entry e's load on its polygon and dissipation go to cand.loads[e]
-    (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each granule (module
-    doc); ``step`` is the step's number; reach, m: as in ``pair_force``; the walls of granule i are
-evaluated only where wall_gap[i] ≤ near, m (``wall_gaps``). The polygon bundles
-    come as arguments, not as a ``Polygons``: a parallel loop takes a named tuple only from an
-    argument or a constructor call (numba 0.68); the other bundles are unpacked before the loop
-    (module doc). One chunk runs in ``_integrate_serial`` (no parallel region to open).
+    or closed, granules released) of chunk c (per-chunk values instead of shared reduction
+    variables). Polygon contacts: the candidate pairs ``cand`` (``Candidates``) of each granule
+    with the posed polygons poly (``PolygonArrays``) of bounding radii rho (m), table
+    (``TableArrays``) and history phist; entry e's load on its polygon and dissipation go to
+    cand.loads[e] (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each
+    granule (module doc); ``step`` is the step's number; reach, m: as in ``pair_force``; the
+    walls of granule i are evaluated only where wall_gap[i] ≤ near, m (``wall_gaps``). The
+    polygon bundles come as arguments, not as a ``Polygons``: a parallel loop takes a named
+    tuple only from an argument or a constructor call (numba 0.68); the other bundles are
+    unpacked before the loop (module doc). One chunk runs in ``_integrate_serial`` (no parallel
+    region to open).
     """
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
