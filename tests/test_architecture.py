@@ -17,11 +17,11 @@ ALLOWED: dict[str, set[str]] = {
     "case": {"case", "analytic", "geometry"},
     "model": {"model", "case", "analytic", "geometry"},
     "engine": {"engine", "model", "analytic", "geometry", "contact", "contact.protocol"},
-    "contact": {"contact", "engine", "model", "analytic", "geometry"},
+    "contact": {"contact", "engine", "model", "analytic", "geometry", "cores"},
     "output": {"output", "model", "geometry", "analytic"},
     "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
-                "runner", "stopping", "__init__"},
+                "runner", "stopping", "cores", "__init__"},
     "runner": {"runner", "case", "model", "engine", "geometry", "output", "stopping",
                "checkpoints"},
     "checkpoints": {"checkpoints", "engine", "output", "__init__"},
@@ -29,6 +29,7 @@ ALLOWED: dict[str, set[str]] = {
             "stopping", "checkpoints", "progress"},
     "stopping": set(),
     "progress": set(),
+    "cores": set(),
     "__init__": set(),
 }  # fmt: skip
 """Part -> the parts it may import. ``engine`` may import the contact-model registry

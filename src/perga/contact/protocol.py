@@ -88,8 +88,8 @@ class ContactModel(Protocol):
     """Granules and their contacts (with each other, the hammers and the chamber wall).
 
     granule_dt: the granules' step, s (the machine step divided by the model's substeps);
-    impacts: the granule-hammer impacts completed so far, in order; threads: the CPU threads its
-    step uses.
+    impacts: the granule-hammer impacts completed so far, in order; threads: the most CPU threads
+    its step has used at once.
     """
 
     granule_dt: float

@@ -1,8 +1,9 @@
 """Where a study's runs execute: a Dask cluster (``dask.distributed``).
 
 By default a ``LocalCluster`` of worker processes on loopback, one thread each and numba on one
-thread (``NUMBA_NUM_THREADS=1``), as many workers as the machine has free cores (its cores
-less its one-minute load average, at least one). Given a scheduler's address, the runs go to
+thread (``NUMBA_NUM_THREADS=1``), as many workers as the machine has free cores
+(``perga.cores``: its cores less what other processes use, at least one). Given a scheduler's
+address, the runs go to
 that cluster instead (one started with ``dask scheduler`` / ``dask worker``, or by
 ``dask-jobqueue`` on SLURM or PBS: start it there and pass its address); given a
 ``dask.distributed.Client``, to that client's cluster. The run directories must be on a file
@@ -19,27 +20,17 @@ swallowed in a callback of ``distributed``'s is raised after the next row,
 from __future__ import annotations
 
 import contextlib
-import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from distributed import Client, LocalCluster, as_completed
 
+from perga.cores import free_cores
 from perga.stopping import raise_swallowed
 from perga.studies.jobs import Job, failed_row, run_job
 
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 """Environment of local workers: one thread each, numba's and BLAS's included."""
-
-
-def free_cores() -> int:
-    """The machine's cores less its one-minute load average (rounded), at least 1."""
-    cores = os.cpu_count() or 1
-    try:
-        load = os.getloadavg()[0]
-    except OSError:
-        load = 0.0
-    return max(1, cores - round(load))
 
 
 @contextlib.contextmanager

@@ -4,15 +4,19 @@ what a run used in its summary."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numba
 import numpy as np
 import pytest
 
+from perga.case import load_case
 from perga.cli import main
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
 from perga.contact.soft import threads as t
+from perga.engine import Simulation
+from perga.model.from_case import scene_spec
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -41,20 +45,41 @@ def test_a_dask_worker_limit_of_one_holds(monkeypatch: pytest.MonkeyPatch) -> No
     assert t.kernel_threads(4, 8) == 1
 
 
+class FakeCores:
+    """A ``CoreMonitor`` that reports the free cores of ``looks`` in turn, the last one from then
+    on."""
+
+    def __init__(self, looks: list[int]) -> None:
+        self.looks = looks
+        self.seen = 0
+
+    def free(self) -> int:
+        self.seen += 1
+        return self.looks[min(self.seen, len(self.looks)) - 1]
+
+
+def fake_cores(monkeypatch: pytest.MonkeyPatch, *looks: int) -> None:
+    """The soft model sees ``looks`` free cores in turn, looking at every machine step."""
+    monkeypatch.setattr("perga.contact.soft.model.CoreMonitor", lambda: FakeCores(list(looks)))
+    monkeypatch.setattr("perga.contact.soft.model.RECHECK", 0.0)
+
+
 def test_a_run_gives_the_same_bytes_on_one_thread_and_on_two(tmp_path, monkeypatch, request):
-    """The soft separator with its work in two chunks (solver.threads = 2), run once with two
-    cores free and once with one: the tables and ParaView frames are identical."""
+    """The soft separator with its work in two chunks (solver.threads = 2), run once with one
+    core free throughout and once with the free cores going 2, 1, 2, ... from step to step (a
+    job started and ended on the other core): the tables and ParaView frames are identical, and
+    the summary gives the most threads used at once."""
     held = numba.get_num_threads()
     numba.set_num_threads(2)  # the conftest holds numba at one thread; a run may now use two
     request.addfinalizer(lambda: numba.set_num_threads(held))
     runs = []
-    for free in (2, 1):
-        monkeypatch.setattr("perga.contact.soft.model.free_cores", lambda free=free: free)
-        out = tmp_path / f"free-{free}"
+    for looks in ([1], [2, 1] * 1000):
+        fake_cores(monkeypatch, *looks)
+        out = tmp_path / f"free-{len(looks)}"
         args = ["run", str(ROOT / "cases" / "soft-separator.toml"), "-o", str(out), "--quiet",
                 "--set", "solver.threads=2", "--set", "solver.duration=0.02"]  # fmt: skip
         assert main(args) == 0
-        assert json.loads((out / "summary.json").read_text())["threads"] == free
+        assert json.loads((out / "summary.json").read_text())["threads"] == max(looks)
         runs.append(out)
     files = sorted(p.relative_to(runs[0]) for p in runs[0].rglob("*") if p.is_file())
     files = [f for f in files if f.name != "summary.json" and f.parts[0] != "checkpoints"]
@@ -62,18 +87,29 @@ def test_a_run_gives_the_same_bytes_on_one_thread_and_on_two(tmp_path, monkeypat
     assert [f for f in files if (runs[0] / f).read_bytes() != (runs[1] / f).read_bytes()] == []
 
 
-def test_free_cores_is_cores_minus_load(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(t.os, "sched_getaffinity", lambda _: {0, 1}, raising=False)
-    for load, free in ((0.2, 2), (0.6, 1), (1.4, 1), (3.0, 1)):
-        monkeypatch.setattr(t.os, "getloadavg", lambda load=load: (load, 0.0, 0.0))
-        assert t.free_cores() == free
+def test_a_run_follows_the_free_cores(monkeypatch, request):
+    """Looking every step, the model's threads follow the free cores (never more than the
+    chunks); ``threads`` keeps the most."""
+    held = numba.get_num_threads()
+    numba.set_num_threads(2)
+    request.addfinalizer(lambda: numba.set_num_threads(held))
+    fake_cores(monkeypatch, 1, 1, 2, 2, 1, 4)
+    spec = scene_spec(load_case(ROOT / "cases" / "soft-separator.toml"))
+    spec = replace(spec, contact_model=replace(spec.contact_model, threads=2))
+    sim = Simulation(spec)
+    used = [sim.contacts.granules.threads]
+    for _ in range(5):
+        sim.step()
+        used.append(sim.contacts.granules.threads)
+    assert used == [1, 1, 2, 2, 1, 2]
+    assert sim.contacts.threads == 2
 
 
 @pytest.mark.parametrize(("asked", "free", "warned"), [(2, 1, True), (1, 1, False)])
 def test_the_summary_says_how_many_threads_and_warns_when_fewer(
     tmp_path, monkeypatch: pytest.MonkeyPatch, asked, free, warned
 ):
-    monkeypatch.setattr("perga.contact.soft.model.free_cores", lambda: free)
+    fake_cores(monkeypatch, free)
     out = tmp_path / "run"
     case = ROOT / "cases" / "soft-single-granule.toml"
     args = ["run", str(case), "-o", str(out), "--quiet", "--set", f"solver.threads={asked}",

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
+from time import monotonic
 
 import numpy as np
 
@@ -34,7 +35,8 @@ from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.kernel import COUNT_RELEASES
 from perga.contact.soft.machine import MachinePolygons
-from perga.contact.soft.threads import free_cores, kernel_chunks, kernel_threads, numba_threads
+from perga.contact.soft.threads import RECHECK, kernel_chunks, kernel_threads, numba_threads
+from perga.cores import CoreMonitor
 from perga.engine import units as u
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
@@ -83,11 +85,15 @@ class SoftContacts:
         self.chunks = kernel_chunks(spec.contact_model.threads, len(spec.granules))
         """Chunks of the kernel's pair forces (:mod:`perga.contact.soft.threads`: from the case
         and the granules present at the start; the results depend on them)."""
-        self.threads = kernel_threads(self.chunks, free_cores())
-        """Threads that compute them (never more than the free cores; the results do not
-        depend on them)."""
+        self._cores = CoreMonitor() if self.chunks > 1 else None
+        """The free cores, looked at every ``RECHECK`` s while there are chunks to share."""
+        self._next_look = monotonic() + RECHECK
+        threads = kernel_threads(self.chunks, self._cores.free()) if self._cores else 1
+        self.threads = threads
+        """The most threads that have computed them at once (``granules.threads`` now: never
+        more than the free cores; the results do not depend on them)."""
         self.granules = soft_granules(
-            spec, self.polygons.polygons, self.polygons.materials, self.threads, self.chunks
+            spec, self.polygons.polygons, self.polygons.materials, threads, self.chunks
         )
         self.materials = granule_table_materials(spec)
         """The granule-table rows' materials (those of granules present and fed, then a round
@@ -109,7 +115,7 @@ class SoftContacts:
         self._x0 = g.x.copy()
         self._granule_energy0 = self._granule_energies()
         self._kinetic0 = float(self._granule_energy0.sum())
-        with numba_threads(self.threads):
+        with numba_threads(self.granules.threads):
             self._elastic0 = g.contact_energy()
         self._gone = LedgerTerms()
         self._inflow = 0.0
@@ -123,7 +129,7 @@ class SoftContacts:
     def running(self) -> AbstractContextManager[None]:
         """numba's thread count held at :attr:`threads` over a run (each kernel call then
         finds it set: setting and restoring it costs about 3.5 µs a step)."""
-        return numba_threads(self.threads)
+        return numba_threads(self.granules.threads)
 
     def present_ids(self) -> np.ndarray:
         """The ids of the granules present, in the kernel's row order."""
@@ -139,9 +145,22 @@ class SoftContacts:
         self.polygons.pose(self.granule_dt, machine)
         if self.log is not None:
             self.log.before()
+        if self._cores is not None:
+            self._follow_free_cores()
         self.granules.step(self.substeps)
         moment = self.polygons.apply_loads()
         self._moment = moment * self._machine_dt / ANGULAR_IMPULSE
+
+    def _follow_free_cores(self) -> None:
+        """Threads as the free cores allow, looked at every ``RECHECK`` wall seconds: a job
+        started on a core meanwhile takes a thread away, one ended gives it back."""
+        now = monotonic()
+        if now < self._next_look:
+            return
+        self._next_look = now + RECHECK
+        threads = kernel_threads(self.chunks, self._cores.free())
+        self.granules.set_threads(threads)
+        self.threads = max(self.threads, threads)
 
     def after_machine_step(self, time: float, machine: MachineState) -> float:
         """Open and close impacts (hammer angles from ``machine``), report released granules;
@@ -170,7 +189,7 @@ class SoftContacts:
         removed granules brought and took."""
         g = self.granules
         energies = self._granule_energies()
-        with numba_threads(self.threads):
+        with numba_threads(self.granules.threads):
             elastic = g.contact_energy()
         present = LedgerTerms(
             kinetic=float(energies.sum()),
@@ -244,7 +263,7 @@ class SoftContacts:
             gravity_work=float(np.sum(g.m[rows] * fall)),
             outflow=float(energies[rows].sum()),
         )
-        with numba_threads(self.threads):
+        with numba_threads(self.granules.threads):
             elastic = g.remove(rows)
         self._gone = self._gone + gone + LedgerTerms(outflow=elastic)
         for name in ("ids", "_reported", "_x0", "_granule_energy0"):
@@ -254,5 +273,5 @@ class SoftContacts:
 
     def contact_counts(self) -> tuple[np.ndarray, FloatArray]:
         """Per granule, its contacts now and the largest of their overlaps, m."""
-        with numba_threads(self.threads):
+        with numba_threads(self.granules.threads):
             return self.granules.contact_counts()

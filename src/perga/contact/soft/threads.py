@@ -4,9 +4,10 @@ The kernel sums the granule-pair forces in chunks (``perga.contact.soft.kernel``
 chunks fix the order of every sum: results depend on the chunk count, never on the threads that
 compute the chunks. So the chunks come from the case alone (``solver.threads`` if given; "auto":
 one below ``THREADED_FROM`` granules, ``AUTO_CHUNKS`` from there), and the threads from the
-machine: as many as chunks, never more than the free cores nor numba's own limit
-(``numba.get_num_threads``, which a Dask worker sets to one). The same case gives the same bytes
-on an idle machine, a busy one and a Dask worker.
+machine: as many as chunks, never more than the free cores (``perga.cores``, looked at again
+every ``RECHECK`` seconds of a run) nor numba's own limit (``numba.get_num_threads``, which a
+Dask worker sets to one). The same case gives the same bytes on an idle machine, a busy one and
+a Dask worker.
 
 Each kernel step opens several parallel regions whose launch costs tens of µs; below
 ``THREADED_FROM`` granules that costs more than a second thread gains, and on a busy machine a
@@ -16,7 +17,6 @@ second thread that has no free core to run on makes a step many times slower
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -24,15 +24,11 @@ import numba
 
 THREADED_FROM = 4000
 """Granule count from which "auto" splits the work (docs/performance.md)."""
+RECHECK = 1.0
+"""Wall seconds between a run's looks at the free cores (a job started or ended meanwhile)."""
 AUTO_CHUNKS = 2
 """Chunks of "auto" from ``THREADED_FROM`` granules: the gain measured on two cores
 (docs/performance.md); more threads need ``solver.threads``."""
-
-
-def free_cores() -> int:
-    """CPU cores this process may use minus the one-minute load average, at least 1."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return max(1, (cores or 1) - round(os.getloadavg()[0]))
 
 
 def kernel_chunks(requested: int | None, granules: int) -> int:
