@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from numba import njit
 
 Vec2 = tuple[float, float]
 
@@ -83,17 +84,36 @@ class OutletSpec:
 
     def leaving(self, positions: np.ndarray, radii: np.ndarray) -> np.ndarray:
         """Which granules (centres, radii; m) have reached the outlet, (n,) bool."""
-        p = np.asarray(positions, dtype=float).reshape(-1, 2)
-        r = np.asarray(radii, dtype=float)
-        if self.kind == "radius":
-            return np.hypot(p[:, 0], p[:, 1]) > self.radius
-        n = np.asarray(self.normal, dtype=float) / math.hypot(*self.normal)
-        d = p - np.asarray(self.point, dtype=float)
-        out = d @ n > -r  # touching the line or past it
-        if self.kind == "screen":
-            along = np.abs(d @ np.array([-n[1], n[0]]))
-            out &= (along <= 0.5 * self.width) & (2.0 * r < self.aperture)
-        return out
+        p = np.ascontiguousarray(positions, dtype=float).reshape(-1, 2)
+        r = np.ascontiguousarray(radii, dtype=float)
+        nx, ny = self.normal
+        norm = math.hypot(nx, ny)
+        return _leaving(
+            p, r, _KINDS.index(self.kind), self.radius, self.point[0], self.point[1],
+            nx / norm, ny / norm, 0.5 * self.width, self.aperture,
+        )  # fmt: skip
+
+
+_KINDS = ("radius", "line", "screen")
+
+
+@njit(cache=True)
+def _leaving(p, r, kind, radius, px, py, nx, ny, half_width, aperture):
+    """``OutletSpec.leaving`` in one compiled loop: kind 0 beyond ``radius`` of the axis; 1 the
+    line through (px, py) with unit normal (nx, ny) touched or passed (d·n > −r); 2 that, within
+    half_width of the point along the line, for granules narrower than ``aperture``."""
+    out = np.empty(p.shape[0], dtype=np.bool_)
+    for i in range(p.shape[0]):
+        if kind == 0:
+            out[i] = math.hypot(p[i, 0], p[i, 1]) > radius
+            continue
+        dx = p[i, 0] - px
+        dy = p[i, 1] - py
+        hit = dx * nx + dy * ny > -r[i]
+        if kind == 2:
+            hit = hit and abs(dy * nx - dx * ny) <= half_width and 2.0 * r[i] < aperture
+        out[i] = hit
+    return out
 
 
 @dataclass(frozen=True)
