@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, plane, uniform_table
-from perga.contact.soft.kernel import wall_gaps
+from perga.contact.soft.kernel import WALL_PLANE, wall_gaps
 
 R = 2e-3
 MASS = 1e-4
@@ -71,6 +71,6 @@ def test_a_strike_from_beyond_the_skin_in_one_call_is_the_strike_step_by_step(wa
     assert np.array_equal(one.x, steps.x)
     assert np.array_equal(one.v, steps.v)
     assert np.array_equal(one.w, steps.w)
-    normal = wall[3:5] if wall[0] == 1 else -one.x[0] / np.linalg.norm(one.x[0])
+    normal = wall[3:5] if wall[0] == WALL_PLANE else -one.x[0] / np.linalg.norm(one.x[0])
     assert float(one.v[0] @ normal) > 0.0
     assert one.w[0] != 50.0
