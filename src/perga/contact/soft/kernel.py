@@ -316,15 +316,25 @@ def _pair_range(
 ):  # fmt: skip
     """Pair forces of the list rows lo:hi (granules i) into out (n, 3) = (fx, fy, torque), which
     it zeroes first; returns the energy those contacts dissipated, J. Arguments as in
-    ``pair_forces``."""
+    ``pair_forces``. A pair farther apart than r_i + r_j + reach that holds no spring has no
+    force and nothing to release: it is skipped before ``pair_force``, whose zeros would
+    otherwise be added."""
     for i in range(out.shape[0]):
         out[i, 0] = 0.0
         out[i, 1] = 0.0
         out[i, 2] = 0.0
     dissipated = 0.0
     for i in range(lo, hi):
+        xi = x[i, 0]
+        yi = x[i, 1]
+        ri = r[i]
         for k in range(start[i], start[i + 1]):
             j = nbr[k]
+            dx = xi - x[j, 0]
+            dy = yi - x[j, 1]
+            far = ri + r[j] + reach
+            if dx * dx + dy * dy > far * far and hist[k] == 0.0:
+                continue  # no force and no spring to release (``pair_force``): nothing to add
             fx, fy, ti, tj, de = pair_force(
                 i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
             )
