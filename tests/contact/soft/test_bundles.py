@@ -89,6 +89,7 @@ def test_plain_tuples_for_advance_follow_the_field_order():
     _same(TableArrays(*named.table), table)
     _same(PolygonLoads(*named.loads), polys)
     assert named.hist is g.polygon_hist
+    assert all(a is b for a, b in zip(kernel.CandidateList(*named.listed), g._listed, strict=True))
     named = kernel.NeighbourList(*nbrs)
     assert named.start is g.start and named.nbr is g.nbr
     assert named.hist is g.hist and named.x_ref is g.x_ref
@@ -108,13 +109,15 @@ def test_advance_takes_named_or_plain_bundles_alike():
             polys, table, 20, 0.0, math.inf
         )
         polygons = kernel.Polygons(
-            polys.arrays(), table.arrays(), named.polygon_hist, polys.loads()
-        )
-        named.start, named.nbr, named.hist, _ = kernel.advance(
+            polys.arrays(), table.arrays(), named.polygon_hist, polys.loads(),
+            kernel.CandidateList(*named._listed),
+        )  # fmt: skip
+        named.start, named.nbr, named.hist, _, cstart, cpoly, _ = kernel.advance(
             kernel.Settings(*settings), kernel.Granules(*state), kernel.GranuleProps(*props),
             kernel.Bonds(*bonds), params, kernel.Walls(*walls), polygons,
             kernel.NeighbourList(*nbrs), kernel.Work(*work),
         )  # fmt: skip
+        named._listed = (cstart, cpoly, *named._listed[2:])
         named._rebuild = False
         named.steps += 20
         named.time += 20 * named.dt

@@ -16,7 +16,7 @@ from perga.contact.soft.kernel import (
     DISSIPATED_PAIRS,
     DISSIPATED_POLYGONS,
 )
-from perga.contact.soft.polygon_forces import candidates
+from perga.contact.soft.polygon_forces import candidate_reach, candidates
 from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
@@ -348,7 +348,9 @@ def test_candidate_list_holds_exactly_the_pairs_its_rule_lets_in():
     hist = np.zeros((300, 3, HIST_COLUMNS))
     hist[:, :, HIST_ACTIVE] = rng.random((300, 3)) < 0.2
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
-    start, listed = candidates(x, r, poly, rho, hist, span, skin, dt)
+    reach = np.empty(3)
+    candidate_reach(poly, rho, span, skin, dt, reach)
+    start, listed = candidates(x, r, poly, rho, hist, reach)
     expected = []
     for i in range(300):
         for k in range(3):
@@ -455,3 +457,86 @@ def test_default_step_resolves_polygon_contacts(kind):
     else:
         assert g.t_c < min(pair, disc_on_face)
     assert g.dt == pytest.approx(g.t_c / 50.0, rel=1e-12)
+
+
+def _plate_and_row() -> SoftGranules:
+    """A kinematic plate 4 mm × 20 mm spinning slowly as it slides at 2 m/s towards a row of ten
+    discs 10-37 mm ahead of it."""
+    table, dt = _linear(0.7, friction=0.5)
+    polys = polygon_set(
+        [_box(0.004, 0.02, -0.01, 0.0)], np.array([[-0.01, 0.0]]), kind=[KINEMATIC],
+        velocity=np.array([[2.0, 0.0]]), omega=np.array([5.0]),
+    )  # fmt: skip
+    x = np.column_stack([0.01 + 3.0 * R * np.arange(10), np.zeros(10)])
+    return _granules(x, np.zeros_like(x), polys, table, dt)
+
+
+def _jump_to(g: SoftGranules, row: int) -> None:
+    """Move the plate along x, by hand, until its front is 0.1 R into disc ``row``."""
+    p = g.polygons
+    move = np.array([g.x[row, 0] - 0.9 * R - p.vertices[:, 0].max(), 0.0])
+    p.set_pose(0, p.vertices + move, p.com[0] + move, p.velocity[0], p.omega[0])
+
+
+def test_a_kept_candidate_list_gives_the_floats_of_a_fresh_one():
+    """Calls of 5 steps, against a twin that forgets its candidate list before every call (so
+    builds it afresh, with the rule of ``candidates``). Midway the plate jumps by hand to 0.1 R
+    into the first disc, which no list held: the kept list no longer holds (the plate moved
+    through its margin) and must be rebuilt, so that the strike happens in both. The two agree
+    bit for bit, and the kept list was built for far fewer calls than the twin's."""
+    kept, fresh = _plate_and_row(), _plate_and_row()
+    calls = 60
+    for call in range(calls):
+        if call == 30:
+            for g in (kept, fresh):
+                _jump_to(g, 0)
+        fresh._forget_candidates()
+        kept.step(5)
+        fresh.step(5)
+    assert kept.polygon_hist[0, 0, HIST_NORMAL_IMPULSE] > 0.0  # the jump struck the first disc
+    for name in ("x", "v", "w", "polygon_hist"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)
+    np.testing.assert_array_equal(kept.polygons.force, fresh.polygons.force)
+    assert fresh.n_candidate_lists >= calls  # and one after each rebuild within a call
+    assert kept.n_candidate_lists <= calls // 5, kept.n_candidate_lists
+
+
+def test_a_kept_candidate_list_is_dropped_when_granules_are_taken_out_or_added():
+    """The plate of ``_plate_and_row`` moved onto the fourth disc; after two calls the first
+    disc is taken out and another added far away (the count stays ten, the rows move up by
+    one). A list kept across that would pair the plate with the wrong rows; the run must equal
+    bit for bit a twin that builds its list afresh before every call."""
+    kept, fresh = _plate_and_row(), _plate_and_row()
+    for g in (kept, fresh):
+        _jump_to(g, 3)
+    for call in range(6):
+        if call == 2:
+            for g in (kept, fresh):
+                g.remove([0])
+                g.add([[0.0, 0.05]], [R], [M_DISC], mat=[0], inertia=[I_DISC])
+        fresh._forget_candidates()
+        kept.step(5)
+        fresh.step(5)
+    assert kept.polygon_hist[2, 0, HIST_NORMAL_IMPULSE] > 0.0  # the struck disc, now row 2
+    for name in ("x", "v", "w", "polygon_hist"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)
+
+
+def test_a_kept_candidate_list_is_dropped_when_a_diagnostic_rebuilds_the_neighbour_list():
+    """A disc of ``_plate_and_row`` moved by hand 0.1 R into the plate, ``invalidate``
+    called, and the overlaps read (``max_overlap`` rebuilds the neighbour list then, outside
+    the kernel): the next calls must not keep a list built around the old reference
+    positions. Bit for bit as a twin that builds its list afresh before every call."""
+    kept, fresh = _plate_and_row(), _plate_and_row()
+    for call in range(6):
+        if call == 2:
+            for g in (kept, fresh):
+                g.x[5] = (g.polygons.vertices[:, 0].max() + 0.9 * R, 0.0)
+                g.invalidate()
+                g.max_overlap()
+        fresh._forget_candidates()
+        kept.step(5)
+        fresh.step(5)
+    assert kept.polygon_hist[5, 0, HIST_NORMAL_IMPULSE] > 0.0  # the moved disc was struck
+    for name in ("x", "v", "w", "polygon_hist"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)

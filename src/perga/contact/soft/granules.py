@@ -179,6 +179,9 @@ class SoftGranules:
         self._rebuild = True
         self.time = 0.0
         self.n_rebuilds = 0
+        self.n_candidate_lists = 0
+        """Polygon candidate lists built (``kernel.advance``), a diagnostic."""
+        self._forget_candidates()
 
     @property
     def _poly(self) -> tuple[PolygonSet, ContactTable]:
@@ -323,13 +326,22 @@ class SoftGranules:
         return before - self.contact_energy()
 
     def _resized(self) -> None:
-        """After ``add``/``remove``: the accumulator, and the skin if it is the default."""
+        """After ``add``/``remove``: the accumulator, the candidate list (its rows are the old
+        granules'), and the skin if it is the default."""
         self._acc = kernel.new_accumulator(self.chunks, self.n)
+        self._forget_candidates()
         if self._default_skin and self.n:
             skin = default_skin(self.r)
             if skin != self.skin:
                 self.skin = skin
                 self._rebuild = True
+
+    def _forget_candidates(self) -> None:
+        """Drop the polygon candidate list the kernel keeps from call to call
+        (``kernel.CandidateList``): the next call builds one."""
+        polys = self._poly[0]
+        empty = np.zeros(0, np.int64)
+        self._listed = (empty, empty, np.zeros_like(polys.vertices), np.zeros(polys.n_poly))
 
     def set_threads(self, threads: int) -> None:
         """Use ``threads`` numba threads from the next step on (the chunks stay: the results
@@ -362,14 +374,16 @@ class SoftGranules:
         try:
             threaded = self.threads > 1 and self._acc.shape[0] > 1
             advance = kernel.advance_threaded if threaded else kernel.advance
-            self.start, self.nbr, self.hist, rebuilt = advance(
+            self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists = advance(
                 *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap))
             )
         finally:
             if switch:
                 numba.set_num_threads(previous)
+        self._listed = (cstart, cpoly, *self._listed[2:])
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
+        self.n_candidate_lists += int(lists)
         self.steps += n_steps
         self.time += n_steps * self.dt
 
@@ -385,6 +399,7 @@ class SoftGranules:
             (t.law, t.k_n, t.k_t, t.damping, t.friction, t.clamp, t.damping_t),
             self.polygon_hist,
             (p.force, p.torque, p.moment),
+            self._listed,
         )  # fmt: skip
         return (
             (
@@ -420,6 +435,7 @@ class SoftGranules:
                 self.x, self.r, self.skin, self.start, self.nbr, self.hist
             )
             self.x_ref[:] = self.x
+            self._forget_candidates()
             self._rebuild = False
         if not self.pairs or self.start.shape[0] != self.n + 1:
             e = np.empty(0, np.int64)

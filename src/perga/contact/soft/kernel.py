@@ -12,8 +12,8 @@ which numba compiles as tuples with attribute access):
 * ``params``: the pair table (n_mat, n_mat, N_PARAMS) of ``perga.contact.soft.laws``;
 * ``Walls``: rows (n_walls, 6) and the tangential history hist (n, n_walls), below;
 * ``Polygons``: ``PolygonArrays``, ``TableArrays``, the contact history (n, n_poly,
-  ``HIST_COLUMNS``) and ``PolygonLoads`` (``perga.contact.soft.polygon_set``), empty arrays for
-  no polygons;
+  ``HIST_COLUMNS``) and ``PolygonLoads`` (``perga.contact.soft.polygon_set``), and the candidate
+  list kept from the last call (``CandidateList``), empty arrays for no polygons;
 * ``NeighbourList``: the half list start, nbr, hist (``perga.contact.soft.neighbours``) and the
   positions x_ref (n, 2) it was built at;
 * ``Work``: the per-chunk force accumulator acc (n_chunks, n, 3), the contact forces f (n, 2)
@@ -47,8 +47,9 @@ moves rigidly from its pose at the call's first force evaluation with its (fixed
 step j (0-based) it is where ``polygon_forces.pose`` puts it j·dt later, the PINNED pivot moving
 with it. After the call the polygons hold the pose n·dt later (the granules' time) and the loads
 are the means over the call. Contacts are evaluated for a candidate list
-(``polygon_forces.candidates``), built at the call's first step and after every neighbour-list
-rebuild, so that granules far from every polygon cost nothing per step.
+(``polygon_forces.candidates``), so that granules far from every polygon cost nothing per step;
+it is built after every neighbour-list rebuild with a margin for ``REUSE_CALLS`` more calls,
+and the calls after keep it while the polygons stay within that margin (``advance``).
 
 Dissipation: every contact reports the energy its law dissipated over the step
 (``laws.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
@@ -100,10 +101,13 @@ from perga.contact.soft.laws import (
 )
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import (
+    REUSE_CALLS,
     Candidates,
     Pose,
     add_loads,
+    candidate_reach,
     candidates,
+    candidates_hold,
     polygon_contact,
     pose,
 )
@@ -170,15 +174,30 @@ class Walls(NamedTuple):
     hist: np.ndarray
 
 
+class CandidateList(NamedTuple):
+    """A polygon candidate list kept from call to call (``polygon_forces.candidates``): start
+    (n + 1,) int64 (another length: none kept) and polygon (entries,) int64, as in
+    ``Candidates``; vertices (n_vertices, 2), m, the polygons' vertices when it was built, and
+    reach (n_poly,), m, the reach it was built with (``candidate_reach``), both written in
+    place."""
+
+    start: np.ndarray
+    polygon: np.ndarray
+    vertices: np.ndarray
+    reach: np.ndarray
+
+
 class Polygons(NamedTuple):
     """Polygons for the kernel: arrays (``PolygonArrays``, posed in place during a call), table
     (``TableArrays``), hist (n, n_poly, ``HIST_COLUMNS``) the contact history, loads
-    (``PolygonLoads``) the mean loads over a call."""
+    (``PolygonLoads``) the mean loads over a call, listed (``CandidateList``) the candidate
+    list the last call left."""
 
     arrays: PolygonArrays
     table: TableArrays
     hist: np.ndarray
     loads: PolygonLoads
+    listed: CandidateList
 
 
 class NeighbourList(NamedTuple):
@@ -678,7 +697,9 @@ def _motion_of(i, x, v, a_prev, x_ref, h):
 @njit(cache=True)
 def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
     """Advance settings.n_steps symplectic Euler steps on one thread; returns (start, nbr, hist,
-    n_rebuilds), the neighbour list after the call and the number of rebuilds.
+    n_rebuilds, cand_start, cand_polygon, n_lists): the neighbour list after the call, the
+    number of rebuilds, the polygon candidate list after the call (``CandidateList``'s start
+    and polygon) and the number of candidate lists built.
 
     The bundles are those of the module doc; each may also be a plain tuple in its fields' order
     (``tuple(bundle)``, for ``Polygons`` its parts too): numba types a named-tuple argument by
@@ -693,11 +714,15 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     dt·v term keeps listed every pair that ``touching`` may need half a step before first
     contact), when nbrs.start is not a list for these n granules, or when settings.rebuild;
     nbrs.x_ref holds the positions at the last build and is updated in place. The polygon
-    candidate list (``polygon_forces.candidates``) is built at the first step and after every
-    rebuild. On return work.f and work.tq hold the contact forces and torques of the last step,
-    granules.a_prev its accelerations, the polygons their pose n_steps·dt after the call's start
-    and their loads the mean force, torque and moment over the call; work.dissipated and
-    work.counts have been added to.
+    candidate list (``polygon_forces.candidates``) is built after every rebuild, and at the
+    first step unless the list polygons.listed still holds (``candidates_hold``: built since
+    the last rebuild, for its own call's span plus ``REUSE_CALLS`` calls of this length, and
+    the polygons have not moved through that margin); a list that holds any pair that can touch
+    gives the same floats as the shortest one (a pair out of reach adds zeros). On return
+    work.f and work.tq hold the contact forces and torques of the last step, granules.a_prev
+    its accelerations, the polygons their pose n_steps·dt after the call's start and their
+    loads the mean force, torque and moment over the call; work.dissipated and work.counts
+    have been added to.
     """
     return _advance(
         settings, granules, props, bonds, params, walls, polygons, nbrs, work,
@@ -733,6 +758,7 @@ def _advance(
         TableArrays(*polygons.table),
         polygons.hist,
         PolygonLoads(*polygons.loads),
+        CandidateList(*polygons.listed),
     )
     nbrs = NeighbourList(*nbrs)
     work = Work(*work)
@@ -753,6 +779,10 @@ def _advance(
     chunk = np.zeros((n_chunks, 6))
     lost = np.zeros(n_chunks)
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
+    cstart, cpoly = polygons.listed.start, polygons.listed.polygon
+    built, reach_built = polygons.listed.vertices, polygons.listed.reach
+    needed = np.empty(n_poly)
+    n_lists = 0
     n_rebuilds = 0
     dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
     tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
@@ -763,6 +793,7 @@ def _advance(
     fresh = False
     for step in range(n_steps):
         reach = dt * math.sqrt(umax)
+        rebuilt = need
         if need:
             if pairs:
                 start, nbr, hist = build(x, r, skin, start, nbr, hist)
@@ -779,7 +810,17 @@ def _advance(
                 pose(origin, poly, step * dt)
             if not fresh:
                 span = (n_steps - 1 - step) * dt
-                cstart, cpoly = candidates(x_ref, r, poly, rho, phist, span, skin, dt)
+                candidate_reach(poly, rho, span, skin, dt, needed)
+                if (
+                    rebuilt
+                    or cstart.shape[0] != n + 1
+                    or not candidates_hold(poly.vertices, poly.start, built, reach_built, needed)
+                ):
+                    span += REUSE_CALLS * n_steps * dt
+                    candidate_reach(poly, rho, span, skin, dt, reach_built)
+                    built[:, :] = poly.vertices
+                    cstart, cpoly = candidates(x_ref, r, poly, rho, phist, reach_built)
+                    n_lists += 1
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
         if pairs:
@@ -810,7 +851,7 @@ def _advance(
         force /= n_steps
         torque /= n_steps
         moment /= n_steps
-    return start, nbr, hist, n_rebuilds
+    return start, nbr, hist, n_rebuilds, cstart, cpoly, n_lists
 
 
 def new_accumulator(n_chunks: int, n: int) -> np.ndarray:

@@ -313,32 +313,66 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach):
     return separation(px, py, poly.vertices, poly.start[k], poly.start[k + 1]) < limit
 
 
-@nb.njit(cache=True, parallel=True)
-def candidates(x_ref, r, poly, rho, hist, span, skin, dt):
-    """(granule, polygon) pairs the fused step evaluates over the next ``span`` s of a call, as
-    a CSR list (start (n + 1,) int64, polygon of each entry), sorted by granule then polygon:
-    ``Candidates.start`` and ``Candidates.polygon``.
+REUSE_CALLS = 8
+"""A call's candidate list is built for its own span plus this many calls of the same length,
+so that the calls after it keep it while the polygons have not used up that margin
+(``candidates_hold``)."""
 
-    poly: the polygons posed now (``PolygonArrays``); x_ref: granule positions at the
-    last neighbour-list build; skin: its skin, m. The kernel rebuilds that list when
-    2|x − x_ref| + dt|v| would exceed the skin, so at every step |x − x_ref| + ½ dt |v| ≤ ½ skin.
-    No point of polygon k moves faster than S = |v_c| + |ω| ρ, so within ``span`` the gap
-    g = d − r_i between a granule and it falls by at most S·span plus the granule's
-    displacement; a pair not in contact touches (``laws.touching``, approach rate ≤
-    |v_i| + |v_c| + |ω|(ρ + g)) only if (1 − ½ dt|ω|) g < ½ dt (|v_i| + |v_c| + |ω| ρ). So with
-    g measured from x_ref to the polygon now, pairs with (1 − ½ dt|ω|) g ≥ ½ skin + S·span +
-    ½ dt (|v_c| + |ω| ρ) are left out. Pairs in contact (``HIST_ACTIVE``) are always in, so that
-    their end is evaluated. One pass over the pairs: row i of a scratch (n, n_poly) array takes
-    granule i's entries, then the rows are gathered.
-    """
-    n = x_ref.shape[0]
+
+@nb.njit(cache=True)
+def candidate_reach(poly, rho, span, skin, dt, reach):
+    """Into reach (n_poly,): the reach, m, beyond which a granule cannot touch polygon k within
+    ``span`` s of a call (``candidates``): (½ skin + S (span + ½ dt))/(1 − ½ dt|ω|), S = |v_c| +
+    |ω| ρ the fastest point of the polygon, ∞ where 1 − ½ dt|ω| ≤ 0. poly: ``PolygonArrays``;
+    rho: ``bounding_radii``, m."""
     velocity, omega = poly.velocity, poly.omega
-    n_poly = omega.shape[0]
-    reach = np.empty(n_poly)
-    for k in range(n_poly):
+    for k in range(omega.shape[0]):
         top = math.sqrt(velocity[k, 0] ** 2 + velocity[k, 1] ** 2) + abs(omega[k]) * rho[k]
         slack = 1.0 - 0.5 * dt * abs(omega[k])
         reach[k] = (0.5 * skin + top * (span + 0.5 * dt)) / slack if slack > 0.0 else math.inf
+
+
+@nb.njit(cache=True)
+def candidates_hold(vertices, start, built, reach_built, reach):
+    """Whether a candidate list built with reach ``reach_built`` (n_poly,) m, its polygons'
+    vertices then at ``built``, still holds every pair that can touch within the reach
+    ``reach`` (``candidate_reach``) now that they are at ``vertices`` (start: each polygon's
+    vertex rows). The displacement of a convex polygon's points under the rigid motion since is
+    affine in the point, so its largest length, ``moved``, is at a vertex; a granule's distance
+    to the polygon has fallen by at most ``moved``, and a pair left out stays out of reach while
+    reach_built − moved ≥ reach."""
+    for k in range(start.shape[0] - 1):
+        moved = 0.0
+        for q in range(start[k], start[k + 1]):
+            dx = vertices[q, 0] - built[q, 0]
+            dy = vertices[q, 1] - built[q, 1]
+            moved = max(moved, math.sqrt(dx * dx + dy * dy))
+        if not reach[k] + moved <= reach_built[k]:
+            return False
+    return True
+
+
+@nb.njit(cache=True, parallel=True)
+def candidates(x_ref, r, poly, rho, hist, reach):
+    """(granule, polygon) pairs the fused step evaluates, as a CSR list (start (n + 1,) int64,
+    polygon of each entry), sorted by granule then polygon: ``Candidates.start`` and
+    ``Candidates.polygon``.
+
+    poly: the polygons posed now (``PolygonArrays``); x_ref: granule positions at the
+    last neighbour-list build; reach (n_poly,), m: ``candidate_reach`` of the span the list
+    must serve. The kernel rebuilds the neighbour list when 2|x − x_ref| + dt|v| would exceed
+    the skin, so at every step |x − x_ref| + ½ dt |v| ≤ ½ skin. No point of polygon k moves
+    faster than S = |v_c| + |ω| ρ, so within the span the gap g = d − r_i between a granule and
+    it falls by at most S·span plus the granule's displacement; a pair not in contact touches
+    (``laws.touching``, approach rate ≤ |v_i| + |v_c| + |ω|(ρ + g)) only if (1 − ½ dt|ω|) g <
+    ½ dt (|v_i| + |v_c| + |ω| ρ). So with g measured from x_ref to the polygon now, pairs with
+    (1 − ½ dt|ω|) g ≥ ½ skin + S·span + ½ dt (|v_c| + |ω| ρ), i.e. g ≥ reach[k], are left
+    out. Pairs in contact (``HIST_ACTIVE``) are always in, so that their end is evaluated. One
+    pass over the pairs: row i of a scratch (n, n_poly) array takes granule i's entries, then
+    the rows are gathered.
+    """
+    n = x_ref.shape[0]
+    n_poly = reach.shape[0]
     found = np.empty((n, n_poly), np.int32)
     count = np.empty(n, np.int64)
     for i in nb.prange(n):
