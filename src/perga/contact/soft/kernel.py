@@ -48,7 +48,7 @@ step j (0-based) it is where ``polygon_forces.pose`` puts it j·dt later, the PI
 with it. After the call the polygons hold the pose n·dt later (the granules' time) and the loads
 are the means over the call. Contacts are evaluated for a candidate list
 (``polygon_forces.candidates``), so that granules far from every polygon cost nothing per step;
-it is built after every neighbour-list rebuild with a margin for ``REUSE_CALLS`` more calls,
+it is built after every neighbour-list rebuild with a margin of ``CANDIDATE_MARGIN`` skins,
 and the calls after keep it while the polygons stay within that margin (``advance``).
 
 Dissipation: every contact reports the energy its law dissipated over the step
@@ -101,7 +101,7 @@ from perga.contact.soft.laws import (
 )
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import (
-    REUSE_CALLS,
+    CANDIDATE_MARGIN,
     Candidates,
     Pose,
     add_loads,
@@ -716,8 +716,8 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     nbrs.x_ref holds the positions at the last build and is updated in place. The polygon
     candidate list (``polygon_forces.candidates``) is built after every rebuild, and at the
     first step unless the list polygons.listed still holds (``candidates_hold``: built since
-    the last rebuild, for its own call's span plus ``REUSE_CALLS`` calls of this length, and
-    the polygons have not moved through that margin); a list that holds any pair that can touch
+    the last rebuild with its reach lengthened by ``CANDIDATE_MARGIN`` skins, and the polygons
+    have not moved through that margin); a list that holds any pair that can touch
     gives the same floats as the shortest one (a pair out of reach adds zeros). On return
     work.f and work.tq hold the contact forces and torques of the last step, granules.a_prev
     its accelerations, the polygons their pose n_steps·dt after the call's start and their
@@ -809,15 +809,14 @@ def _advance(
             if step > 0:
                 pose(origin, poly, step * dt)
             if not fresh:
-                span = (n_steps - 1 - step) * dt
-                candidate_reach(poly, rho, span, skin, dt, needed)
+                candidate_reach(poly, rho, (n_steps - 1 - step) * dt, skin, dt, needed)
                 if (
                     rebuilt
                     or cstart.shape[0] != n + 1
                     or not candidates_hold(poly.vertices, poly.start, built, reach_built, needed)
                 ):
-                    span += REUSE_CALLS * n_steps * dt
-                    candidate_reach(poly, rho, span, skin, dt, reach_built)
+                    for k in range(n_poly):
+                        reach_built[k] = needed[k] + CANDIDATE_MARGIN * skin
                     built[:, :] = poly.vertices
                     cstart, cpoly = candidates(x_ref, r, poly, rho, phist, reach_built)
                     n_lists += 1

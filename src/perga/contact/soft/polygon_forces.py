@@ -313,10 +313,10 @@ def _candidate(i, k, x_ref, r, poly, rho, hist, reach):
     return separation(px, py, poly.vertices, poly.start[k], poly.start[k + 1]) < limit
 
 
-REUSE_CALLS = 8
-"""A call's candidate list is built for its own span plus this many calls of the same length,
-so that the calls after it keep it while the polygons have not used up that margin
-(``candidates_hold``)."""
+CANDIDATE_MARGIN = 0.5
+"""A candidate list is built with its reach lengthened by this fraction of the neighbour
+list's skin, so that the calls after keep it while the polygons' motion has not used up that
+margin (``candidates_hold``): a skin of its own, as the neighbour list's."""
 
 
 @nb.njit(cache=True)
