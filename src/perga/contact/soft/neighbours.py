@@ -12,6 +12,8 @@ import numpy as np
 from numba import njit, prange
 
 _MAX_CELLS_PER_GRANULE = 4
+_ROW_CAP = 16
+"""Entries of a granule's scratch row in ``build`` (a half list in 2-D holds a handful)."""
 
 
 @njit(cache=True)
@@ -57,8 +59,9 @@ def _cells(x, r, skin):
 
 
 @njit(cache=True, inline="always")
-def _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, nbr, k0):
-    """Neighbours j > i of i in the 3×3 cells around it; written to nbr[k0:] if k0 ≥ 0; count."""
+def _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, out, k0, cap):
+    """Neighbours j > i of i in the 3×3 cells around it, in scan order: the first ``cap`` of
+    them written to out[k0:]; returns their count."""
     cx = cell[i] % ncx
     cy = cell[i] // ncx
     xi = x[i, 0]
@@ -75,8 +78,8 @@ def _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, nbr, k0):
                 dx = x[j, 0] - xi
                 dy = x[j, 1] - yi
                 if dx * dx + dy * dy < reach * reach:
-                    if k0 >= 0:
-                        nbr[k0 + k] = j
+                    if k < cap:
+                        out[k0 + k] = j
                     k += 1
     return k
 
@@ -87,20 +90,29 @@ def build(x, r, skin, old_start, old_nbr, old_hist):
 
     old_start, old_nbr, old_hist: the previous list and its tangential history (empty arrays
     for none); history of pairs present in both lists is copied, new pairs start at 0.
+
+    Each granule's 3×3 cells are scanned once, into a scratch row of ``_ROW_CAP`` entries; the
+    rows are then gathered into the list, and a longer row is scanned again straight into it
+    (the same order: a row lists its neighbours in scan order either way).
     """
     n = x.shape[0]
     if n == 0:
         return np.zeros(1, np.int64), np.empty(0, np.int64), np.empty(0)
     cell, order, cstart, ncx, ncy = _cells(x, r, skin)
     counts = np.zeros(n + 1, np.int64)
-    dummy = np.empty(0, np.int64)
+    found = np.empty((n, _ROW_CAP), np.int64)
     for i in prange(n):
-        counts[i + 1] = _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, dummy, -1)
+        counts[i + 1] = _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, found[i], 0, _ROW_CAP)
     for i in range(n):
         counts[i + 1] += counts[i]
     nbr = np.empty(counts[n], np.int64)
     for i in prange(n):
-        _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, nbr, counts[i])
+        c = counts[i + 1] - counts[i]
+        if c <= _ROW_CAP:
+            for q in range(c):
+                nbr[counts[i] + q] = found[i, q]
+        else:  # a row longer than the scratch: scanned again, straight into the list
+            _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, nbr, counts[i], c)
     start = counts
     hist = np.zeros(nbr.shape[0])
     if old_hist.shape[0] > 0 and old_start.shape[0] == n + 1:
