@@ -241,27 +241,21 @@ class Settings(NamedTuple):
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def pair_force(
-    i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
+    i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt, tangential
 ):  # fmt: skip
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
     k; updates hist[k].
 
-    reach, m: dt times the largest extrapolated speed |v + ½ dt a_prev| of any granule, a bound
-    of the gap a pair can close in half a step (½ dt |δ̇|). A pair farther apart than r_i + r_j +
-    reach is not ``touching``: it is rejected on its squared distance, before its velocities are
-    read. tangential: whether any pair of the table has friction or tangential damping; if not,
-    the tangential law is skipped (its force is zero and its spring stays empty). Rolling
-    resistance is computed only for a pair with μ_r > 0."""
+    dx, dy = x_i − x_j and d2 = dx² + dy², m and m²; rs = r_i + r_j, m; far = rs + reach, m,
+    reach being dt times the largest extrapolated speed |v + ½ dt a_prev| of any granule, a
+    bound of the gap a pair can close in half a step (½ dt |δ̇|). A pair farther apart than far
+    is not ``touching``; ``_pair_range`` skips it unless it holds a spring, which is dropped
+    here before the velocities are read. tangential: whether any pair of the table has friction
+    or tangential damping; if not, the tangential law is skipped (its force is zero and its
+    spring stays empty). Rolling resistance is computed only for a pair with μ_r > 0."""
     h = 0.5 * dt
-    dx = x[i, 0] - x[j, 0]
-    dy = x[i, 1] - x[j, 1]
-    d2 = dx * dx + dy * dy
-    rs = r[i] + r[j]
-    far = rs + reach
     if d2 > far * far:
         xi = hist[k]
-        if xi == 0.0:
-            return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
         gap = rs - math.sqrt(d2)
         return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], r[i] * r[j] / rs, gap, xi)
@@ -351,12 +345,15 @@ def _pair_range(
             j = nbr[k]
             dx = xi - x[j, 0]
             dy = yi - x[j, 1]
-            far = ri + r[j] + reach
-            if dx * dx + dy * dy > far * far and hist[k] == 0.0:
+            d2 = dx * dx + dy * dy
+            rs = ri + r[j]
+            far = rs + reach
+            if d2 > far * far and hist[k] == 0.0:
                 continue  # no force and no spring to release (``pair_force``): nothing to add
             fx, fy, ti, tj, de = pair_force(
-                i, j, k, x, v, w, a_prev, r, m, inertia, mat, params, hist, dt, reach, tangential
-            )
+                i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt,
+                tangential,
+            )  # fmt: skip
             out[i, 0] += fx
             out[i, 1] += fy
             out[i, 2] += ti
