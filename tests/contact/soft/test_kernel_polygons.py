@@ -478,27 +478,40 @@ def _jump_to(g: SoftGranules, row: int) -> None:
     p.set_pose(0, p.vertices + move, p.com[0] + move, p.velocity[0], p.omega[0])
 
 
-def test_a_kept_candidate_list_gives_the_floats_of_a_fresh_one():
-    """Calls of 5 steps, against a twin that forgets its candidate list before every call (so
-    builds it afresh, with the rule of ``candidates``). Midway the plate jumps by hand to 0.1 R
-    into the first disc, which no list held: the kept list no longer holds (the plate moved
-    through its margin) and must be rebuilt, so that the strike happens in both. The two agree
-    bit for bit, and the kept list was built for far fewer calls than the twin's."""
-    kept, fresh = _plate_and_row(), _plate_and_row()
-    calls = 60
+def _against_fresh(kept: SoftGranules, fresh: SoftGranules, calls: int, changes) -> None:
+    """``calls`` calls of 5 steps of ``kept`` and of ``fresh``, which drops its candidate list
+    before every call (so builds it afresh, with the rule of ``candidates``); changes[c] is
+    applied to both before call c. Then the two must agree bit for bit."""
     for call in range(calls):
-        if call == 30:
+        if call in changes:
             for g in (kept, fresh):
-                _jump_to(g, 0)
+                changes[call](g)
         fresh._forget_candidates()
         kept.step(5)
         fresh.step(5)
-    assert kept.polygon_hist[0, 0, HIST_NORMAL_IMPULSE] > 0.0  # the jump struck the first disc
     for name in ("x", "v", "w", "polygon_hist"):
         np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)
+
+
+def test_a_kept_candidate_list_gives_the_floats_of_a_fresh_one():
+    """Calls of 5 steps against a twin that builds its list afresh (``_against_fresh``). Midway
+    the plate jumps by hand to 0.1 R into the first disc, which no list held: the kept list no
+    longer holds (the plate moved through its margin) and must be rebuilt, so that the strike
+    happens in both. The two agree bit for bit, and the kept list was built for far fewer calls
+    than the twin's."""
+    kept, fresh = _plate_and_row(), _plate_and_row()
+    calls = 60
+    _against_fresh(kept, fresh, calls, {30: lambda g: _jump_to(g, 0)})
+    assert kept.polygon_hist[0, 0, HIST_NORMAL_IMPULSE] > 0.0  # the jump struck the first disc
     np.testing.assert_array_equal(kept.polygons.force, fresh.polygons.force)
     assert fresh.n_candidate_lists >= calls  # and one after each rebuild within a call
     assert kept.n_candidate_lists <= calls // 5, kept.n_candidate_lists
+
+
+def _swap_first_for_far(g: SoftGranules) -> None:
+    """Take the first disc out and add one far away: the count stays, the rows move up."""
+    g.remove([0])
+    g.add([[0.0, 0.05]], [R], [M_DISC], mat=[0], inertia=[I_DISC])
 
 
 def test_a_kept_candidate_list_is_dropped_when_granules_are_taken_out_or_added():
@@ -507,36 +520,23 @@ def test_a_kept_candidate_list_is_dropped_when_granules_are_taken_out_or_added()
     one). A list kept across that would pair the plate with the wrong rows; the run must equal
     bit for bit a twin that builds its list afresh before every call."""
     kept, fresh = _plate_and_row(), _plate_and_row()
-    for g in (kept, fresh):
-        _jump_to(g, 3)
-    for call in range(6):
-        if call == 2:
-            for g in (kept, fresh):
-                g.remove([0])
-                g.add([[0.0, 0.05]], [R], [M_DISC], mat=[0], inertia=[I_DISC])
-        fresh._forget_candidates()
-        kept.step(5)
-        fresh.step(5)
+    _against_fresh(kept, fresh, 6, {0: lambda g: _jump_to(g, 3), 2: _swap_first_for_far})
     assert kept.polygon_hist[2, 0, HIST_NORMAL_IMPULSE] > 0.0  # the struck disc, now row 2
-    for name in ("x", "v", "w", "polygon_hist"):
-        np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)
+
+
+def _move_into_plate_and_read(g: SoftGranules) -> None:
+    """Disc 5 moved by hand 0.1 R into the plate, ``invalidate``, then ``max_overlap``, which
+    rebuilds the neighbour list outside the kernel."""
+    g.x[5] = (g.polygons.vertices[:, 0].max() + 0.9 * R, 0.0)
+    g.invalidate()
+    g.max_overlap()
 
 
 def test_a_kept_candidate_list_is_dropped_when_a_diagnostic_rebuilds_the_neighbour_list():
-    """A disc of ``_plate_and_row`` moved by hand 0.1 R into the plate, ``invalidate``
-    called, and the overlaps read (``max_overlap`` rebuilds the neighbour list then, outside
-    the kernel): the next calls must not keep a list built around the old reference
-    positions. Bit for bit as a twin that builds its list afresh before every call."""
+    """A disc of ``_plate_and_row`` moved by hand into the plate and the overlaps read
+    (``_move_into_plate_and_read``): the next calls must not keep a list built around the old
+    reference positions. Bit for bit as a twin that builds its list afresh before every
+    call."""
     kept, fresh = _plate_and_row(), _plate_and_row()
-    for call in range(6):
-        if call == 2:
-            for g in (kept, fresh):
-                g.x[5] = (g.polygons.vertices[:, 0].max() + 0.9 * R, 0.0)
-                g.invalidate()
-                g.max_overlap()
-        fresh._forget_candidates()
-        kept.step(5)
-        fresh.step(5)
+    _against_fresh(kept, fresh, 6, {2: _move_into_plate_and_read})
     assert kept.polygon_hist[5, 0, HIST_NORMAL_IMPULSE] > 0.0  # the moved disc was struck
-    for name in ("x", "v", "w", "polygon_hist"):
-        np.testing.assert_array_equal(getattr(kept, name), getattr(fresh, name), err_msg=name)
