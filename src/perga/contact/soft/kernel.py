@@ -135,6 +135,9 @@ DISSIPATED_PAIRS, DISSIPATED_WALLS, DISSIPATED_POLYGONS = 0, 1, 2
 COUNT_CONTACT_CHANGES, COUNT_RELEASES = 0, 1
 """Entries of the (2,) running counts ``Work.counts``: granule-polygon contacts opened or
 closed (a contact's ``HIST_ACTIVE`` flag changed), granules released from their bonds."""
+SPECIAL_MARGIN = 0.5
+"""The wall distance the flagged granules of ``mark_special`` cover beyond the call's current
+``near``, in skins: they are flagged again only when ``near`` grows past it."""
 
 
 class Granules(NamedTuple):
@@ -517,19 +520,78 @@ def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap,
     x[i, 1] += dt * vy
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def mark_special(wall_gap, covered, cstart, held, flags, order):
+    """Flag the granules the per-granule pass must take on its full path (``_integrate_range``):
+    those within covered (m) of a wall (wall_gap, ``wall_gaps``), with an entry in the polygon
+    candidate list (cstart, ``Candidates.start``) or held by a bond. Writes flags (n,) int8 and
+    their indices in increasing order to order (n,) int64; returns their count."""
+    count = 0
+    for i in range(flags.shape[0]):
+        special = wall_gap[i] <= covered or cstart[i + 1] > cstart[i] or held[i] != 0
+        flags[i] = special
+        if special:
+            order[count] = i
+            count += 1
+    return count
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
+def _integrate_free(
+    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity
+):  # fmt: skip
+    """The free path of ``_integrate_range``: every granule i of lo:hi not flagged sums its pair
+    forces (acc, into f and tq) and moves (``_kick_drift_one``); returns their (max
+    displacement², max speed², max extrapolated speed²) (``_motion_of``). A function of its
+    own, not inlined: the small loop compiles tighter than inside the full path's function
+    (docs/performance.md). Compiled as the passes are (parallel=True, error_model="numpy": the
+    same arithmetic)."""
+    n_chunks = acc.shape[0]
+    h = 0.5 * dt
+    dmax = 0.0
+    smax = 0.0
+    umax = 0.0
+    for i in range(lo, hi):
+        if flags[i]:
+            continue
+        fx = 0.0
+        fy = 0.0
+        t = 0.0
+        for q in range(n_chunks):
+            fx += acc[q, i, 0]
+            fy += acc[q, i, 1]
+            t += acc[q, i, 2]
+        f[i, 0] = fx
+        f[i, 1] = fy
+        tq[i] = t
+        _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        dmax = max(dmax, d2)
+        smax = max(smax, s2)
+        umax = max(umax, u2)
+    return dmax, smax, umax
+
+
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _integrate_range(
-    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, wall_gap, acc, f, tq,
+    lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, walls_near, acc, f, tq,
     held, bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly,
     ploads, x_ref, scalars,
 ):  # fmt: skip
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
-    fields, cand's), wall_gap (``wall_gaps``) and scalars = (dt, damp = 1/(1 + drag·dt), v_cap,
-    step, reach, near, gravity) (a tuple: a call of more than 30 arguments compiles to one numba
-    cannot inline): a granule's walls are evaluated only where wall_gap ≤ near; returns the
-    range's (max displacement², max speed², wall dissipation, max extrapolated speed², polygon
-    contacts opened or closed, granules released) (``_integrate``)."""
+    fields, cand's), walls_near = (wall_gap (``wall_gaps``), flags, order) and scalars = (dt,
+    damp = 1/(1 + drag·dt), v_cap, step, reach, near, gravity) (tuples: a call of more than 30
+    arguments compiles to one numba cannot inline): a granule's walls are evaluated only where
+    wall_gap ≤ near; returns the range's (max displacement², max speed², wall dissipation, max
+    extrapolated speed², polygon contacts opened or closed, granules released) (``_integrate``).
+
+    Two loops over disjoint granules: the flagged ones (``mark_special``: every granule that
+    can reach a wall or a polygon or is held; order lists them) take the full path in index
+    order, then every other granule only sums its pair forces and moves (``_integrate_free``).
+    A granule's step reads and writes only its own state (and its candidate entries), so the
+    split gives the same floats."""
     dt, damp, v_cap, step, reach, near, gravity = scalars
+    wall_gap, flags, order = walls_near
     n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
@@ -538,7 +600,8 @@ def _integrate_range(
     lost = 0.0
     changes = 0
     releases = 0
-    for i in range(lo, hi):
+    for s in range(np.searchsorted(order, lo), np.searchsorted(order, hi)):
+        i = order[s]
         fx = 0.0
         fy = 0.0
         t = 0.0
@@ -586,13 +649,19 @@ def _integrate_range(
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
+    fmax = _integrate_free(
+        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity
+    )
+    dmax = max(dmax, fmax[0])
+    smax = max(smax, fmax[1])
+    umax = max(umax, fmax[2])
     return dmax, smax, lost, umax, changes, releases
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def _integrate(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step, reach, wall_gap, near,
+    chunk, step, reach, walls_near, near,
 ):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
@@ -604,8 +673,10 @@ def _integrate(
     with the posed polygons poly (``PolygonArrays``) of bounding radii rho (m), table
     (``TableArrays``) and history phist; entry e's load on its polygon and dissipation go to
     cand.loads[e] (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each
-    granule (module doc); ``step`` is the step's number; reach, m: as in ``pair_force``; the
-    walls of granule i are evaluated only where wall_gap[i] ≤ near, m (``wall_gaps``). The
+    granule (module doc); ``step`` is the step's number; reach, m: as in ``pair_force``;
+    walls_near = (wall_gap, flags, order): the walls of granule i are evaluated only where
+    wall_gap[i] ≤ near, m (``wall_gaps``), and only the granules flagged by ``mark_special``
+    (listed in order) take the full path (``_integrate_range``). The
     polygon bundles come as arguments, not as a ``Polygons``: a parallel loop takes a named
     tuple only from an argument or a constructor call (numba 0.68); the other bundles are
     unpacked before the loop (module doc). One chunk runs in ``_integrate_serial`` (no parallel
@@ -624,7 +695,7 @@ def _integrate(
     for c in prange(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, rows, wall_hist, wall_gap, acc, f, tq, held, bond_force, released_step,
+            params, rows, wall_hist, walls_near, acc, f, tq, held, bond_force, released_step,
             release_force, poly, table, phist, rho, cstart, cpoly, ploads, x_ref,
             (dt, damp, v_cap, step, reach, near, gravity),
         )  # fmt: skip
@@ -639,7 +710,7 @@ def _integrate(
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _integrate_serial(
     granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work, x_ref,
-    chunk, step, reach, wall_gap, near,
+    chunk, step, reach, walls_near, near,
 ):  # fmt: skip
     """``_integrate`` on one thread, chunk after chunk, without a parallel region."""
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
@@ -651,7 +722,7 @@ def _integrate_serial(
     for c in range(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, walls.rows, walls.hist, wall_gap, work.acc, work.f, work.tq, held,
+            params, walls.rows, walls.hist, walls_near, work.acc, work.f, work.tq, held,
             bond_force, released_step, release_force, poly, table, phist, rho, cand.start,
             cand.polygon, cand.loads, x_ref,
             (settings.dt, damp, settings.v_cap, step, reach, near, settings.gravity),
@@ -785,6 +856,10 @@ def _advance(
     tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
     wall_gap = np.empty(n)
     near = 0.0
+    flags = np.empty(n, np.int8)
+    order = np.empty(n, np.int64)
+    n_special = 0
+    covered = -math.inf
     need = settings.rebuild or (pairs and start.shape[0] != n + 1)
     need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
@@ -819,6 +894,9 @@ def _advance(
                     n_lists += 1
                 cand = Candidates(cstart, cpoly, np.zeros((cpoly.shape[0], 4)))
                 fresh = True
+        if rebuilt or step == 0 or near > covered:  # wall gaps or candidates new, near grown
+            covered = near + SPECIAL_MARGIN * skin
+            n_special = mark_special(wall_gap, covered, cand.start, bonds.held, flags, order)
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
@@ -826,7 +904,8 @@ def _advance(
             )  # fmt: skip
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
-            settings, work, x_ref, chunk, settings.first_step + step, reach, wall_gap, near,
+            settings, work, x_ref, chunk, settings.first_step + step, reach,
+            (wall_gap, flags, order[:n_special]), near,
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
