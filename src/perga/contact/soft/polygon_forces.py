@@ -161,61 +161,28 @@ def _end_contact(i, k, mat, pmat, table, hist):
     return released
 
 
-@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
-def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
-    """Contact of granule i with polygon k over one step; updates hist[i, k] (module doc).
-
-    x, v, w, r, m, mat: the granule arrays (``Discs``); poly: ``PolygonArrays`` at the step's
-    pose; table: ``TableArrays``; rho: ``bounding_radii`` of the polygons, m; dt: step, s. Returns
-    (acting, fx, fy, tq, tq_poly, dissipated): whether the contact acts in the step (its
-    HIST_ACTIVE flag after it); force on the granule, N (−it on the polygon); torque on the
-    granule, N·m; torque on the polygon about its centre of mass, N·m; energy dissipated over
-    the step, J.
-    """
-    com, pvel, pomega, kind = poly.com, poly.velocity, poly.omega, poly.kind
+@nb.njit(cache=True, fastmath=FASTMATH, error_model="numpy")
+def _acting_contact(
+    i, k, m, mat, poly, table, hist, dt, ri, delta, delta_dot, rate, slip, vt, px, py, nx, ny,
+    arm, active,
+):  # fmt: skip
+    """The force of a contact of granule i with polygon k that acts in the step
+    (``polygon_contact``, which computes the arguments: the granule's radius ri and overlap
+    delta, m; approach rate
+    delta_dot and slip of the half step and their extrapolations rate and vt, m/s; contact
+    point (px, py), m; normal (nx, ny); lever arm, m; active: the contact acted in the last
+    step); updates hist[i, k]. Returns (fx, fy, tq, tq_poly, dissipated) as
+    ``polygon_contact``. Not inlined: the test before it runs for every candidate pair and
+    compiles to a tighter loop without this body (docs/performance.md); compiled with the
+    error model of the parallel passes that call it (the same arithmetic)."""
+    com, kind = poly.com, poly.kind
     pmass, pinertia, pivot, pmat = poly.mass, poly.inertia, poly.pivot, poly.mat
     law, k_n, k_t, damping = table.law, table.k_n, table.k_t, table.damping
     friction, clamp, damping_t = table.friction, table.clamp, table.damping_t
-    xi = x[i, 0]
-    yi = x[i, 1]
-    ri = r[i]
-    cx = xi - com[k, 0]
-    cy = yi - com[k, 1]
-    dist2 = cx * cx + cy * cy
-    reach = rho[k] + ri
-    # Skip when even the fastest approach cannot make it touch within the step:
-    # |rate| <= 1.5 |v_i - v_p| + 0.5 |last rate|, |v_p| <= |v_c| + |w| (dist + r_i).
-    if dist2 > reach * reach:
-        dist = math.sqrt(dist2)
-        bound = 1.5 * (
-            math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
-            + math.sqrt(pvel[k, 0] * pvel[k, 0] + pvel[k, 1] * pvel[k, 1])
-            + abs(pomega[k]) * (dist + ri)
-        ) + 0.5 * abs(hist[i, k, HIST_RATE])
-        if dist - reach >= 0.5 * dt * bound:
-            return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
-    d, nx, ny = closest_feature(xi, yi, poly.vertices, poly.start, poly.solid, poly.corner, k)
-    delta = ri - d
-    # Contact point: middle of the overlap (the surface point before first touch); t = (-ny, nx).
-    arm = ri - 0.5 * max(delta, 0.0)
-    px = xi - arm * nx
-    py = yi - arm * ny
-    tx = -ny
-    ty = nx
-    # Relative velocity of the disc's material point to the polygon's at p.
     rcx = px - com[k, 0]
     rcy = py - com[k, 1]
-    vrx = v[i, 0] + w[i] * arm * ny - (pvel[k, 0] - pomega[k] * rcy)
-    vry = v[i, 1] - w[i] * arm * nx - (pvel[k, 1] + pomega[k] * rcx)
-    delta_dot = -(vrx * nx + vry * ny)
-    slip = vrx * tx + vry * ty
-    # Rates of the last half step; extrapolated to the force time from the previous ones (none
-    # at first touch: no contact force yet).
-    active = hist[i, k, HIST_ACTIVE] != 0.0
-    rate = 1.5 * delta_dot - 0.5 * hist[i, k, HIST_RATE] if active else delta_dot
-    vt = 1.5 * slip - 0.5 * hist[i, k, HIST_SLIP] if active else slip
-    if not touching(delta, rate, dt):
-        return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
+    tx = -ny
+    ty = nx
     if not active:  # a new contact: the previous one's totals are forgotten
         hist[i, k, HIST_NORMAL_IMPULSE] = 0.0
         hist[i, k, HIST_TANGENTIAL_IMPULSE] = 0.0
@@ -257,7 +224,66 @@ def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
     hist[i, k, HIST_PEAK_FORCE] = max(hist[i, k, HIST_PEAK_FORCE], fn)
     fx = fn * nx + ft * tx
     fy = fn * ny + ft * ty
-    return True, fx, fy, -arm * ft, -(rcx * fy - rcy * fx), dissipated
+    return fx, fy, -arm * ft, -(rcx * fy - rcy * fx), dissipated
+
+
+@nb.njit(cache=True, inline="always", fastmath=FASTMATH)
+def polygon_contact(i, k, x, v, w, r, m, mat, poly, table, rho, dt, hist):
+    """Contact of granule i with polygon k over one step; updates hist[i, k] (module doc).
+
+    x, v, w, r, m, mat: the granule arrays (``Discs``); poly: ``PolygonArrays`` at the step's
+    pose; table: ``TableArrays``; rho: ``bounding_radii`` of the polygons, m; dt: step, s. Returns
+    (acting, fx, fy, tq, tq_poly, dissipated): whether the contact acts in the step (its
+    HIST_ACTIVE flag after it); force on the granule, N (−it on the polygon); torque on the
+    granule, N·m; torque on the polygon about its centre of mass, N·m; energy dissipated over
+    the step, J.
+    """
+    com, pvel, pomega, pmat = poly.com, poly.velocity, poly.omega, poly.mat
+    xi = x[i, 0]
+    yi = x[i, 1]
+    ri = r[i]
+    cx = xi - com[k, 0]
+    cy = yi - com[k, 1]
+    dist2 = cx * cx + cy * cy
+    reach = rho[k] + ri
+    # Skip when even the fastest approach cannot make it touch within the step:
+    # |rate| <= 1.5 |v_i - v_p| + 0.5 |last rate|, |v_p| <= |v_c| + |w| (dist + r_i).
+    if dist2 > reach * reach:
+        dist = math.sqrt(dist2)
+        bound = 1.5 * (
+            math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+            + math.sqrt(pvel[k, 0] * pvel[k, 0] + pvel[k, 1] * pvel[k, 1])
+            + abs(pomega[k]) * (dist + ri)
+        ) + 0.5 * abs(hist[i, k, HIST_RATE])
+        if dist - reach >= 0.5 * dt * bound:
+            return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
+    d, nx, ny = closest_feature(xi, yi, poly.vertices, poly.start, poly.solid, poly.corner, k)
+    delta = ri - d
+    # Contact point: middle of the overlap (the surface point before first touch); t = (-ny, nx).
+    arm = ri - 0.5 * max(delta, 0.0)
+    px = xi - arm * nx
+    py = yi - arm * ny
+    tx = -ny
+    ty = nx
+    # Relative velocity of the disc's material point to the polygon's at p.
+    rcx = px - com[k, 0]
+    rcy = py - com[k, 1]
+    vrx = v[i, 0] + w[i] * arm * ny - (pvel[k, 0] - pomega[k] * rcy)
+    vry = v[i, 1] - w[i] * arm * nx - (pvel[k, 1] + pomega[k] * rcx)
+    delta_dot = -(vrx * nx + vry * ny)
+    slip = vrx * tx + vry * ty
+    # Rates of the last half step; extrapolated to the force time from the previous ones (none
+    # at first touch: no contact force yet).
+    active = hist[i, k, HIST_ACTIVE] != 0.0
+    rate = 1.5 * delta_dot - 0.5 * hist[i, k, HIST_RATE] if active else delta_dot
+    vt = 1.5 * slip - 0.5 * hist[i, k, HIST_SLIP] if active else slip
+    if not touching(delta, rate, dt):
+        return False, 0.0, 0.0, 0.0, 0.0, _end_contact(i, k, mat, pmat, table, hist)
+    fx, fy, tq, tq_poly, dissipated = _acting_contact(
+        i, k, m, mat, poly, table, hist, dt, ri, delta, delta_dot, rate, slip, vt, px, py, nx,
+        ny, arm, active,
+    )  # fmt: skip
+    return True, fx, fy, tq, tq_poly, dissipated
 
 
 @nb.njit(cache=True, parallel=True, fastmath=FASTMATH)
