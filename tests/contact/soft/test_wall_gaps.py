@@ -74,3 +74,36 @@ def test_a_strike_from_beyond_the_skin_in_one_call_is_the_strike_step_by_step(wa
     normal = wall[3:5] if wall[0] == WALL_PLANE else -one.x[0] / np.linalg.norm(one.x[0])
     assert float(one.v[0] @ normal) > 0.0
     assert one.w[0] != 50.0
+
+
+def _fall(gap: float, calls: int) -> SoftGranules:
+    """A granule at rest with its edge ``gap`` skins above a plane, under a gravity that makes
+    it fall 0.3 skin in its first step; three steps in ``calls`` equal calls."""
+    row = contact_parameters("linear", 0.7, k_n=1e6, friction=0.3)
+    floor = plane((0.0, 0.0), (0.0, 1.0))
+    probe = SoftGranules([[0.0, 0.0]], [R], [MASS], uniform_table(row), walls=[floor], v_max=5.0)
+    g = SoftGranules(
+        [[0.0, R + gap * probe.skin]], [R], [MASS], uniform_table(row), walls=[floor],
+        v_max=5.0, gravity=(0.0, -0.3 * probe.skin / probe.dt**2), skin=probe.skin,
+    )  # fmt: skip
+    for _ in range(calls):
+        g.step(3 // calls)
+    return g
+
+
+def test_a_granule_the_call_did_not_flag_gets_its_walls_once_the_reach_outgrows_them() -> None:
+    """The per-granule pass takes a granule's walls only if ``mark_special`` flagged it: at a
+    call's first step those within ``SPECIAL_MARGIN`` skins of the reach then. Here the reach
+    outgrows that within the call: the granule starts at rest 0.51 skin above the plane (not
+    flagged) and falls 0.3 skin in the first step and 0.6 in the second (about 1,000 m/s: far
+    beyond anything physical, the only way past the margin before the list is rebuilt). The
+    set must be flagged again, so that the plane acts in the second step: one call of three
+    steps equals three calls of one step (each flags afresh) bit for bit, and the plane has
+    slowed the fall (free fall would be 3 g dt after three steps)."""
+    one = _fall(0.51, calls=1)
+    steps = _fall(0.51, calls=3)
+    assert np.array_equal(one.x, steps.x)
+    assert np.array_equal(one.v, steps.v)
+    assert one.n_rebuilds == 2  # the list is rebuilt only before the third step
+    free = -3 * 0.3 * one.skin / one.dt
+    assert one.v[0, 1] > free * (1 + 1e-12)
