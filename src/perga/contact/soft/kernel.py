@@ -51,6 +51,13 @@ are the means over the call. Contacts are evaluated for a candidate list
 it is built after every neighbour-list rebuild with a margin of ``CANDIDATE_MARGIN`` skins,
 and the calls after keep it while the polygons stay within that margin (``advance``).
 
+Per-granule pass (``_integrate``): the granules that can reach a wall, have polygon candidates
+or are held (``mark_special``: at a call's first step, after every rebuild, and when the walls'
+reach ``near`` has grown ``SPECIAL_MARGIN`` skins past its value then) take the full path;
+every other granule only sums its pair forces and moves, in a loop compiled on its own
+(``_integrate_free``). A granule's step touches only its own state, so the split changes no
+float.
+
 Dissipation: every contact reports the energy its law dissipated over the step
 (``laws.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
 contact's end ½ k_t ξ²); ``Work.dissipated`` accumulates [granule pairs, walls, polygons], J.
