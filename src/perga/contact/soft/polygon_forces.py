@@ -168,10 +168,9 @@ def _acting_contact(
 ):  # fmt: skip
     """The force of a contact of granule i with polygon k that acts in the step
     (``polygon_contact``, which computes the arguments: the granule's radius ri and overlap
-    delta, m; approach rate
-    delta_dot and slip of the half step and their extrapolations rate and vt, m/s; contact
-    point (px, py), m; normal (nx, ny); lever arm, m; active: the contact acted in the last
-    step); updates hist[i, k]. Returns (fx, fy, tq, tq_poly, dissipated) as
+    delta, m; approach rate delta_dot and slip of the half step and their extrapolations rate
+    and vt, m/s; contact point (px, py), m; normal (nx, ny); lever arm, m; active: the contact
+    acted in the last step); updates hist[i, k]. Returns (fx, fy, tq, tq_poly, dissipated) as
     ``polygon_contact``. Not inlined: the test before it runs for every candidate pair and
     compiles to a tighter loop without this body (docs/performance.md); compiled with the
     error model of the parallel passes that call it (the same arithmetic)."""
