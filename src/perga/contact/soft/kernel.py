@@ -341,18 +341,22 @@ def _pair_range(
     it zeroes first; returns the energy those contacts dissipated, J. Arguments as in
     ``pair_forces``. A pair farther apart than r_i + r_j + reach that holds no spring has no
     force and nothing to release: it is skipped before ``pair_force``, whose zeros would
-    otherwise be added."""
+    otherwise be added. Numba wraps a negative index around unless the compiler can prove it
+    non-negative, so i starts at max(lo, 0) and an entry j < 0 (there is none) is skipped: the
+    wraparound is then dropped from every index below (docs/performance.md)."""
     for i in range(out.shape[0]):
         out[i, 0] = 0.0
         out[i, 1] = 0.0
         out[i, 2] = 0.0
     dissipated = 0.0
-    for i in range(lo, hi):
+    for i in range(max(lo, 0), hi):
         xi = x[i, 0]
         yi = x[i, 1]
         ri = r[i]
         for k in range(start[i], start[i + 1]):
             j = nbr[k]
+            if j < 0:
+                continue  # never: an index hint (doc)
             dx = xi - x[j, 0]
             dy = yi - x[j, 1]
             d2 = dx * dx + dy * dy
@@ -552,13 +556,14 @@ def _integrate_free(
     displacement², max speed², max extrapolated speed²) (``_motion_of``). A function of its
     own, not inlined: the small loop compiles tighter than inside the full path's function
     (docs/performance.md). Compiled as the passes are (parallel=True, error_model="numpy": the
-    same arithmetic)."""
+    same arithmetic). i starts at max(lo, 0): a non-negative index spares numba's wraparound
+    (``_pair_range``)."""
     n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
     umax = 0.0
-    for i in range(lo, hi):
+    for i in range(max(lo, 0), hi):
         if flags[i]:
             continue
         fx = 0.0
