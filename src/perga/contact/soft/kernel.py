@@ -556,14 +556,13 @@ def _integrate_free(
     displacement², max speed², max extrapolated speed²) (``_motion_of``). A function of its
     own, not inlined: the small loop compiles tighter than inside the full path's function
     (docs/performance.md). Compiled as the passes are (parallel=True, error_model="numpy": the
-    same arithmetic). i starts at max(lo, 0): a non-negative index spares numba's wraparound
-    (``_pair_range``)."""
+    same arithmetic)."""
     n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
     umax = 0.0
-    for i in range(max(lo, 0), hi):
+    for i in range(lo, hi):
         if flags[i]:
             continue
         fx = 0.0
