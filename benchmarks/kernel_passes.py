@@ -46,6 +46,7 @@ from numba import njit
 from perga.case import load_case
 from perga.contact.soft import SoftGranules
 from perga.contact.soft import kernel as k
+from perga.contact.soft.laws import P_DAMPT, P_MU
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import Candidates, polygon_contact
 from perga.contact.soft.polygon_set import PolygonArrays, TableArrays
@@ -95,18 +96,21 @@ STATES: dict[str, Callable[[], SoftGranules]] = {
 
 
 @njit(parallel=True, fastmath=FASTMATH, error_model="numpy")
-def _pairs(reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs, dt, reach, acc, lost):
+def _pairs(reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs, dt, reach, tangential,
+           acc, lost):  # fmt: skip
+    """The pair pass, reps times."""
     start, nbr, hist = nbrs
     for _ in range(reps):
         k._pair_forces_serial(
-            x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, True, acc,
-            lost,
+            x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
+            acc, lost,
         )  # fmt: skip
 
 
 @njit
 def _granules(reps, granules, props, bonds, params, walls, poly, table, phist, cand, settings,
               work, x_ref, reach, wall_gap, covered):  # fmt: skip
+    """The per-granule pass, reps times, with the granules flagged as ``advance`` would."""
     n = granules.x.shape[0]
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
     flags = np.empty(n, np.int8)
@@ -122,6 +126,7 @@ def _granules(reps, granules, props, bonds, params, walls, poly, table, phist, c
 
 @njit(parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _contacts(reps, owner, polygon, x, v, w, r, m, mat, poly, table, dt, phist):
+    """``polygon_contact`` for every candidate entry (granule owner[e], polygon[e]), reps times."""
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
     total = 0.0
     for _ in range(reps):
@@ -134,6 +139,7 @@ def _contacts(reps, owner, polygon, x, v, w, r, m, mat, poly, table, dt, phist):
 
 @njit
 def _build(reps, x, r, skin, start, nbr, hist):
+    """The neighbour-list build, reps times."""
     for _ in range(reps):
         start, nbr, hist = build(x, r, skin, start, nbr, hist)
 
@@ -161,10 +167,11 @@ def runner(g: SoftGranules, part: str) -> tuple[Callable[[int], object], int, in
         cstart = np.zeros(n + 1, np.int64)
     if part == "pairs":
         lost = np.zeros(work[0].shape[0])
+        tangential = bool(np.any(params[..., P_MU] != 0.0) or np.any(params[..., P_DAMPT] != 0.0))
         return (
             lambda reps: _pairs(
-                reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs[:3], dt, reach, work[0],
-                lost,
+                reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs[:3], dt, reach,
+                tangential, work[0], lost,
             ),
             steps, n, "ns a granule a step",
         )  # fmt: skip
