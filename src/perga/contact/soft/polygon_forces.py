@@ -172,8 +172,9 @@ def _acting_contact(
     and vt, m/s; contact point (px, py), m; normal (nx, ny); lever arm, m; active: the contact
     acted in the last step); updates hist[i, k]. Returns (fx, fy, tq, tq_poly, dissipated) as
     ``polygon_contact``. Not inlined: the test before it runs for every candidate pair and
-    compiles to a tighter loop without this body (docs/performance.md); compiled with the
-    error model of the parallel passes that call it (the same arithmetic)."""
+    compiles to a tighter loop without this body (docs/performance.md). Compiled with the error
+    model of the parallel passes that call it; called, its force cannot be fused into the
+    caller's sums, so its floats may differ in the last bit from an inlined law's."""
     com, kind = poly.com, poly.kind
     pmass, pinertia, pivot, pmat = poly.mass, poly.inertia, poly.pivot, poly.mat
     law, k_n, k_t, damping = table.law, table.k_n, table.k_t, table.damping
