@@ -69,6 +69,7 @@ def test_the_history_of_pairs_kept_is_carried_over_and_new_pairs_start_at_zero()
 
 @pytest.mark.parametrize("n", [0, 1])
 def test_no_pairs_for_fewer_than_two_granules(n: int):
+    """No granule or one: an empty list whose start is all zeros."""
     x, r = np.zeros((n, 2)), np.full(n, 1e-3)
     start, nbr, hist = build(x, r, SKIN, *empty_list(0))
     assert start.tolist() == [0] * (n + 1) and nbr.size == 0 and hist.size == 0
