@@ -12,7 +12,13 @@ import pymunk
 import pytest
 
 from perga.engine import chipmunk_state
-from perga.engine.chipmunk_state import ChipmunkState, LayoutError, capture, restore
+from perga.engine.chipmunk_state import (
+    BodyViews,
+    ChipmunkState,
+    LayoutError,
+    capture,
+    restore,
+)
 
 
 def hinged_hammer() -> pymunk.Space:
@@ -96,3 +102,48 @@ def test_a_wrong_body_offset_is_refused(monkeypatch, name):
     monkeypatch.setattr(chipmunk_state, name, getattr(chipmunk_state, name) + 1)
     with pytest.raises(LayoutError):
         capture(hinged_hammer())
+
+
+@pytest.mark.parametrize("name", ["VIEW_F", "VIEW_T"])
+def test_a_wrong_force_offset_is_refused(monkeypatch, name):
+    """The force and torque are written raw: an offset one double off is refused when the
+    views are made (a marked force set through pymunk does not read back)."""
+    monkeypatch.setattr(chipmunk_state, name, getattr(chipmunk_state, name) + 1)
+    with pytest.raises(LayoutError):
+        BodyViews([hammer_of(hinged_hammer())]).views()
+
+
+def test_body_views_read_and_write_the_struct():
+    """A view reads the body's angle and velocity as pymunk's getters do; a force and torque
+    written into it are the body's; the marked check leaves them as they were."""
+    body = hammer_of(hinged_hammer())
+    body.force, body.torque = (0.5, 0.25), -0.125
+    (view,) = BodyViews([body]).views()
+    assert (*body.force, body.torque) == (0.5, 0.25, -0.125)
+    assert view[chipmunk_state.VIEW_ANGLE] == body.angle
+    assert tuple(view[chipmunk_state.VIEW_V : chipmunk_state.VIEW_V + 2]) == tuple(body.velocity)
+    view[chipmunk_state.VIEW_F], view[chipmunk_state.VIEW_T] = 4.0, 5.0
+    assert (body.force.x, body.torque) == (4.0, 5.0)
+
+
+def test_views_are_refused_where_bodies_may_sleep():
+    """Raw writes skip waking a body: a space that lets bodies sleep is refused, one that never
+    does (pymunk's default, perga's) is not."""
+    space = hinged_hammer()
+    BodyViews([hammer_of(space)]).views()
+    space.sleep_time_threshold = 1.0
+    with pytest.raises(ValueError, match="sleep"):
+        BodyViews([hammer_of(space)]).views()
+
+
+def test_body_views_are_made_again_after_pickling():
+    """Pickled as the bodies alone: the copy's views are those of the copy's bodies."""
+    space = hinged_hammer()
+    views = BodyViews([hammer_of(space)])
+    views.views()
+    copy = pickle.loads(pickle.dumps((space, views)))[1]
+    (view,) = copy.views()
+    (body,) = copy.bodies
+    assert body is not hammer_of(space)
+    view[chipmunk_state.VIEW_T] = 6.0
+    assert body.torque == 6.0 and hammer_of(space).torque != 6.0

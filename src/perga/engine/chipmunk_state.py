@@ -26,7 +26,7 @@ from pymunk._chipmunk import ffi
 # 0 velocity_func, 1 position_func, 2 m, 3 m_inv, 4 i, 5 i_inv, 6-7 cog, 8-9 p, 10-11 v,
 # 12-13 f, 14 a, 15 w, 16 t, 17-22 transform (a b c d tx ty)
 _BODY = slice(2, 23)
-_M, _I, _COG, _V, _A, _W, _TX = 2, 4, 6, 10, 14, 15, 21
+_M, _I, _COG, _V, _F, _A, _W, _T, _TX = 2, 4, 6, 10, 12, 14, 15, 16, 21
 # cpConstraint is 13 doubles (6 pointers, maxForce, errorBias, maxBias, cpBool padded, 3
 # pointers); each joint's own fields follow it
 _MAX_FORCE = 6
@@ -135,6 +135,61 @@ def restore(space: pymunk.Space, state: ChipmunkState) -> None:
             raw[first + k] = next(values)
     if next(values, None) is not None:
         raise ValueError("the state holds more joint impulses than the space has joints")
+
+
+VIEW_V, VIEW_F, VIEW_ANGLE, VIEW_W, VIEW_T = (k - _BODY.start for k in (_V, _F, _A, _W, _T))
+VIEW_TRANSFORM = _TX - 4 - _BODY.start
+"""Index in a :class:`BodyViews` view of each field's first double: velocity (2), force (2),
+angle, angular velocity, torque, transform (6: a b c d tx ty)."""
+
+
+class BodyViews:
+    """A numpy view of each of ``bodies``' C structs (cpBody's doubles m to the transform,
+    indices ``VIEW_*``), so that compiled code reads a body's state and sets its force
+    and torque without a call into Chipmunk. Made at the first :meth:`views`, each checked then
+    against pymunk's getters (as :func:`capture`) and by a marked force and torque set through
+    pymunk and read back raw. Writing ``f`` and ``t`` raw is pymunk's setter without
+    ``cpBodyActivate``, which only wakes sleeping bodies: refused for a space that lets bodies
+    sleep. The views live as long as this object holds the bodies; pickled as the bodies alone
+    (the views are made again)."""
+
+    def __init__(self, bodies: list[pymunk.Body]) -> None:
+        self.bodies = bodies
+        self._views: tuple[NDArray[np.float64], ...] | None = None
+
+    def __getstate__(self) -> dict[str, object]:
+        return {"bodies": self.bodies}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._views = None
+
+    def views(self) -> tuple[NDArray[np.float64], ...]:
+        """One writable (21,) view per body, in the bodies' order."""
+        if self._views is None:
+            self._views = tuple(_body_view(b) for b in self.bodies)
+        return self._views
+
+
+def _body_view(body: pymunk.Body) -> NDArray[np.float64]:
+    """The checked view of ``body``'s doubles m to the transform (:class:`BodyViews`)."""
+    space = body.space
+    if space is not None and space.sleep_time_threshold != math.inf:
+        raise ValueError("raw force writes skip waking bodies: the space must not let them sleep")
+    raw = _doubles(body._body)
+    width = _BODY.stop - _BODY.start
+    view = np.frombuffer(ffi.buffer(raw + _BODY.start, width * ffi.sizeof("double")))
+    _check_body(body, view)
+    force, torque = body.force, body.torque
+    body.force, body.torque = (1.5, -2.5), 3.25
+    marked = (view[VIEW_F], view[VIEW_F + 1], view[VIEW_T])
+    body.force, body.torque = force, torque
+    if marked != (1.5, -2.5, 3.25):
+        raise LayoutError(
+            f"pymunk's cpBody layout changed: a force (1.5, -2.5) and torque 3.25 set through "
+            f"pymunk read raw as {marked} (perga knows pymunk {pymunk.version}'s Munk2D layout)"
+        )
+    return view
 
 
 class JointImpulses:

@@ -32,12 +32,21 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
 from perga.engine import units as u
-from perga.engine.batch import BodyWriter
+from perga.engine.chipmunk_state import (
+    VIEW_ANGLE,
+    VIEW_F,
+    VIEW_T,
+    VIEW_TRANSFORM,
+    VIEW_V,
+    VIEW_W,
+    BodyViews,
+)
 from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
 from perga.model.records import HammerState
@@ -52,17 +61,12 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class MachineState:
     """The machine's bodies at one instant (:attr:`Machine.bodies`: row 0 the rotor, then the
-    hammer bodies that are not the rotor), internal units (:mod:`perga.engine.units`), from one
-    ``pymunk.batch`` read: ``table`` (k, 6), per body x, y (its centre of gravity in the world),
-    angle, vx, vy (velocity of the centre of gravity), ω. Compiled code takes the table.
-
-    The same read of every body in the space (granule bodies of the rigid model included):
-    ``space_ids`` their ids in the batch walk's order, ``space`` (n, 6) x, y (the body's
-    position, its local origin), angle, vx, vy, ω."""
+    hammer bodies that are not the rotor), internal units (:mod:`perga.engine.units`), read raw
+    from their C structs (:class:`~perga.engine.chipmunk_state.BodyViews`): ``table`` (k, 6),
+    per body x, y (its centre of gravity in the world), angle, vx, vy (velocity of the centre
+    of gravity), ω. Compiled code takes the table."""
 
     table: FloatArray
-    space_ids: NDArray[np.uintp]
-    space: FloatArray
 
     @property
     def centre(self) -> FloatArray:
@@ -103,7 +107,7 @@ class Machine:
     hammer_outlines: list[list[tuple[float, float]]]
     hinges: list[pymunk.PivotJoint]
     effects: list[Effect] = field(default_factory=list)
-    _reader: BodyWriter | None = field(default=None, repr=False)
+    _raw: BodyViews | None = field(default=None, repr=False)
     _cogs: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
 
     @property
@@ -122,23 +126,25 @@ class Machine:
         return np.array([self.row_of(b) for b in self.hammer_bodies], dtype=np.int64)
 
     def state(self) -> MachineState:
-        """The machine's bodies now, in one batch read (:class:`MachineState`)."""
-        ids, space, table = self._batch().read_internal_space(self._cogs)
-        return MachineState(table, ids, space)
+        """The machine's bodies now (:class:`MachineState`), one compiled read of their structs."""
+        views = self._views()
+        table = np.empty((len(views), 6))
+        _read_bodies(views, self._cogs, table)
+        return MachineState(table)
 
     def set_loads(self, loads: FloatArray) -> None:
         """Set the force and torque of every body of :attr:`bodies` for the next step from
-        ``loads`` (k, 3): fx, fy, torque, internal units, in one batch write."""
-        self._batch().write_internal_loads(loads)
+        ``loads`` (k, 3): fx, fy, torque, internal units, written raw into their structs."""
+        _write_loads(self._views(), loads)
 
-    def _batch(self) -> BodyWriter:
-        """The batch reader and writer of :attr:`bodies` (built at first use, when the space
-        is complete), with their centres of gravity."""
-        if self._reader is None:
+    def _views(self) -> tuple[FloatArray, ...]:
+        """The raw views of :attr:`bodies` (made at first use, when the space is complete),
+        with their centres of gravity."""
+        if self._raw is None:
             bodies = self.bodies
-            self._reader = BodyWriter(self.space, bodies)
+            self._raw = BodyViews(bodies)
             self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
-        return self._reader
+        return self._raw.views()
 
     @property
     def driven(self) -> bool:
@@ -197,6 +203,38 @@ class Machine:
     def _welded_centre(self, spec: HammerSpec) -> pymunk.Vec2d:
         """World position (internal units) of a welded hammer's centre of mass."""
         return self.rotor.local_to_world(u.vec_to_internal(spec.centre_on_rotor, u.LENGTH))
+
+
+@numba.njit(cache=True)
+def _read_bodies(views: tuple[FloatArray, ...], cogs: FloatArray, out: FloatArray) -> None:
+    """Row j of ``out``: body j's centre of gravity in the world, angle, velocity and angular
+    velocity from its raw struct ``views[j]`` (:class:`MachineState`). The body's position is
+    its transform applied to the origin, as ``cpBodyGetPosition`` computes it, and the centre of
+    gravity ``cogs[j]`` (body frame) is added turned by the angle: the same floats as pymunk's
+    ``body.position`` + R(angle)·``center_of_gravity``."""
+    for j in range(len(views)):
+        raw = views[j]
+        t = VIEW_TRANSFORM
+        x = raw[t] * 0.0 + raw[t + 2] * 0.0 + raw[t + 4]
+        y = raw[t + 1] * 0.0 + raw[t + 3] * 0.0 + raw[t + 5]
+        angle = raw[VIEW_ANGLE]
+        c, s = math.cos(angle), math.sin(angle)
+        out[j, 0] = x + (c * cogs[j, 0] - s * cogs[j, 1])
+        out[j, 1] = y + (s * cogs[j, 0] + c * cogs[j, 1])
+        out[j, 2] = angle
+        out[j, 3] = raw[VIEW_V]
+        out[j, 4] = raw[VIEW_V + 1]
+        out[j, 5] = raw[VIEW_W]
+
+
+@numba.njit(cache=True)
+def _write_loads(views: tuple[FloatArray, ...], loads: FloatArray) -> None:
+    """Body j's force and torque (its struct's f and t) from ``loads[j]`` = (fx, fy, torque)."""
+    for j in range(len(views)):
+        raw = views[j]
+        raw[VIEW_F] = loads[j, 0]
+        raw[VIEW_F + 1] = loads[j, 1]
+        raw[VIEW_T] = loads[j, 2]
 
 
 def _rotate(x: float, y: float, angle: float) -> tuple[float, float]:

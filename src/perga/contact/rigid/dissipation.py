@@ -15,14 +15,13 @@ Per contact the dissipated energy is −J·(v̄_a − v̄_b), J the arbiter's to
   velocities), so the split is exact to first order in dt; Chipmunk's position correction
   (``v_bias``) moves bodies without changing velocities and is not an energy term.
 
-How the contact term is measured: no Python callback. :meth:`ArbiterMeter.before_step` keeps
-every body's velocity from the simulation's read of the whole space before the step
-(:class:`~perga.engine.machine.MachineState`, one ``pymunk.batch`` pass);
+How the contact term is measured: no Python callback. :meth:`ArbiterMeter.before_step` reads
+every body's velocity before the step (one ``pymunk.batch`` pass over the whole space);
 :meth:`ArbiterMeter.after_step` reads the space's arbiters (bodies, contact count, total
-impulse, normal, first contact point on each shape) and, if any touches, takes every body's
-position, angle and velocity from the read after the step, and evaluates the sum in compiled
-code. Facts of Pymunk 7.3.1's batch API this relies on, each checked against the
-per-contact callbacks it replaces (``tests/contact/rigid/test_dissipation.py``):
+impulse, normal, first contact point on each shape) and, if any touches, every body's
+position, angle and velocity (a second pass), and evaluates the sum in compiled code. Facts of
+Pymunk 7.3.1's batch API this relies on, each checked against the per-contact callbacks it
+replaces (``tests/contact/rigid/test_dissipation.py``):
 
 * The arbiter list is Chipmunk's arbiter cache: besides the contacts solved in this step it
   holds pairs that touched in the last ``collision_persistence`` steps, whose contact count
@@ -48,8 +47,8 @@ per-contact callbacks it replaces (``tests/contact/rigid/test_dissipation.py``):
 The per-contact terms are summed exactly rounded (``math.fsum``), so that the totals do not
 depend on the order in which Chipmunk lists its arbiters, which varies from run to run.
 
-Costs per step: one arbiter read (a C pass), a few numpy operations and one compiled loop over
-the touching contacts.
+Costs per step: a read of the space and one of the arbiters (C passes); with contacts, another
+read of the space, a few numpy operations and one compiled loop over the touching contacts.
 """
 
 from __future__ import annotations
@@ -61,7 +60,8 @@ import numpy as np
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
-from perga.engine.machine import Machine, MachineState
+from perga.engine.batch import BodyReader
+from perga.engine.machine import Machine
 
 _B = pb.BodyFields
 _A = pb.ArbiterFields
@@ -88,6 +88,7 @@ class ArbiterMeter:
     def _start_caches(self) -> None:
         """The per-step values and the caches keyed by body ids (empty: filled at a step)."""
         self._machine_ids = np.array([b.id for b in self._rotor_driven], dtype=np.uintp)
+        self._space_reader = BodyReader(self._space, ())
         self._moment = 0.0  # contact angular impulse on rotor-driven bodies this step
         self._arbiter_buffer = pb.Buffer()
         self._ids0: NDArray[np.uintp] = np.zeros(0, dtype=np.uintp)
@@ -107,19 +108,19 @@ class ArbiterMeter:
         self._arbiter_buffer = pb.Buffer()
         self._machine_ids = np.zeros(0, dtype=np.uintp)  # the bodies may not be rebuilt yet
 
-    def before_step(self, state: MachineState) -> None:
-        """Keep every body's velocity at the start of a step, from the machine's ``state``
-        (its read of the whole space) taken immediately before ``space.step``."""
+    def before_step(self) -> None:
+        """Keep every body's velocity at the start of a step: call immediately before
+        ``space.step``."""
         if self._machine_ids.size != len(self._rotor_driven):  # first step after unpickling
             self._start_caches()
-        self._ids0, self._table0 = state.space_ids, state.space
+        self._ids0, self._table0, _ = self._space_reader.read_internal_space()
 
-    def after_step(self, state: MachineState) -> float:
-        """Add the step's contact dissipation (bodies as in ``state``, read after the step);
-        returns the contacts' angular impulse about the axis on the rotor-driven bodies in this
-        step (internal units)."""
+    def after_step(self) -> float:
+        """Add the step's contact dissipation: call immediately after ``space.step``, before
+        anything changes a body; returns the contacts' angular impulse about the axis on the
+        rotor-driven bodies in this step (internal units)."""
         self._moment = 0.0
-        self._contacts(state.space_ids, state.space)
+        self._contacts()
         return self._moment
 
     def touching(self) -> tuple[NDArray[np.uintp], NDArray[np.float64]]:
@@ -157,11 +158,12 @@ class ArbiterMeter:
             raise LookupError("an arbiter's body is not among the space's bodies")
         return where
 
-    def _contacts(self, ids: NDArray[np.uintp], after: NDArray[np.float64]) -> None:
+    def _contacts(self) -> None:
         """Add this step's contact dissipation and contact moment on rotor-driven bodies."""
         pair_ids, f = self.touching()
         if pair_ids.shape[0] == 0:
             return
+        ids, after, _ = self._space_reader.read_internal_space()
         where = self._rows_of(ids, pair_ids.ravel())  # rows in the sorted order
         rows = self._order[where].reshape(-1, 2)
         if np.array_equal(self._ids0, ids):

@@ -143,20 +143,21 @@ class RigidContacts:
         return self._writer
 
     def before_machine_step(self, time: float, machine: MachineState) -> None:
-        """Stamp the step's impacts with its end ``time`` (s); keep the bodies' velocities
-        (``machine``'s read of the space) for the dissipation."""
+        """Stamp the step's impacts with its end ``time`` (s); keep the bodies' velocities for
+        the dissipation."""
         if self.recorder is not None:
             self.recorder.time = time
         if self.arbiters is not None:
-            self.arbiters.before_step(machine)
+            self.arbiters.before_step()
 
     def after_machine_step(self, time: float, machine: MachineState) -> float:
-        """Release the held granules whose bond is overloaded; the step's dissipation from the
-        arbiters; returns their angular impulse about the axis on the rotor-driven bodies,
-        internal units."""
+        """The step's dissipation from the arbiters (read before anything moves a body); release
+        the held granules whose bond is overloaded; returns the arbiters' angular impulse about
+        the axis on the rotor-driven bodies, internal units."""
+        moment = 0.0 if self.arbiters is None else self.arbiters.after_step()
         if self._bonds:
             self._hold_or_release(time)
-        return 0.0 if self.arbiters is None else self.arbiters.after_step(machine)
+        return moment
 
     def energy_terms(self) -> LedgerTerms:
         """The granules' kinetic energy, gravity's work on them, what fed and removed granules
