@@ -369,9 +369,9 @@ def test_pivot_work_is_the_impulse_times_the_anchor_velocities() -> None:
         impulses[1] @ -_anchor_velocity(before, after, 0, arms[1]),
     ]
     for k in range(2):
-        work = _pivot_work(before, after, rows[k : k + 1], arms[k : k + 1], impulses[k : k + 1])
+        work = _pivot_work(before, after, rows[k : k + 1], arms[k : k + 1], (impulses[k],))
         assert work == pytest.approx(expected[k], rel=1e-12)
-    total = _pivot_work(before, after, rows, arms, impulses)
+    total = _pivot_work(before, after, rows, arms, tuple(impulses))
     assert total == pytest.approx(sum(expected), rel=1e-12)
 
 

@@ -1,6 +1,6 @@
 """The machine's state read raw from the bodies' structs (Machine.state), the loads written
-back the same way (Machine.set_loads), and the constraint effects' losses booked from two states instead of
-Chipmunk callbacks (effects.ConstraintLosses)."""
+back the same way (Machine.set_loads), and the constraint effects' losses booked from two
+states instead of Chipmunk callbacks (effects.ConstraintLosses)."""
 
 from __future__ import annotations
 

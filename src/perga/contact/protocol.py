@@ -42,8 +42,9 @@ FloatArray = NDArray[np.float64]
 
 
 class GranuleKinematics(Protocol):
-    """All granules' velocities, read and written at once for the effects' kicks, internal units
-    (mm/ms; positions mm), rows in the spec's granule order."""
+    """All granules' velocities, read and written at once for the effects' kicks, rows in the
+    spec's granule order, in the model's own units with the factors to Chipmunk's internal units
+    (mm/ms; positions mm): an internal value is the array's divided by its unit."""
 
     @property
     def count(self) -> int:
@@ -55,12 +56,13 @@ class GranuleKinematics(Protocol):
         may be the model's own arrays)."""
         ...
 
-    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
-        """Velocities (n, 2) and, if asked for, positions (n, 2) (else None): fresh arrays."""
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
+        """Velocities (n, 2), positions (n, 2) if asked for (else None), and the internal
+        velocity and length units in the arrays' units: the model's own arrays or fresh ones."""
         ...
 
-    def write_internal_velocities(self, velocities: FloatArray) -> None:
-        """Set every granule's velocity (n, 2)."""
+    def write_velocities(self, velocities: FloatArray) -> None:
+        """Set every granule's velocity from ``velocities`` (n, 2), as :meth:`read` gave them."""
         ...
 
 

@@ -201,7 +201,7 @@ class JointImpulses:
 
     def __init__(self, joints: list[pymunk.Constraint]) -> None:
         self.joints = joints
-        self._views: list[NDArray[np.float64]] | None = None
+        self._views: tuple[NDArray[np.float64], ...] | None = None
 
     def __getstate__(self) -> dict[str, object]:
         return {"joints": self.joints}
@@ -210,11 +210,17 @@ class JointImpulses:
         self.__dict__.update(state)
         self._views = None
 
+    def views(self) -> tuple[NDArray[np.float64], ...]:
+        """Each joint's jAcc as a view of its struct (two doubles for a pivot, one otherwise),
+        internal units; read in place by compiled code."""
+        if self._views is None:
+            self._views = tuple(_view(j, *_joint_layout(j)) for j in self.joints)
+        return self._views
+
     def read(self) -> NDArray[np.float64]:
         """Every joint's jAcc, one after the other (two doubles for a pivot), internal units."""
-        if self._views is None:
-            self._views = [_view(j, *_joint_layout(j)) for j in self.joints]
-        return np.concatenate(self._views) if self._views else np.zeros(0)
+        views = self.views()
+        return np.concatenate(views) if views else np.zeros(0)
 
 
 def _view(joint: pymunk.Constraint, first: int, length: int) -> NDArray[np.float64]:

@@ -6,10 +6,12 @@ Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpe
 Effects that act on granule velocities (floor friction, air drag) are *kicks*: one compiled
 loop over all granules (numba), with no per-granule Python. Once per machine step, **before**
 the contact model moves anything (:meth:`~perga.engine.simulation.Simulation.step`), a
-:class:`KickRunner` reads every granule's velocity (and position, for the co-rotating floor)
-from the contact model in one pass, every listed kick changes the velocity array in place in
-registry order, each a velocity change over dt that never reverses the velocity it opposes,
-and one write sets them. Effects that are constraints (hinge friction, drive) are pymunk motors.
+:class:`KickRunner` takes every granule's velocity (and position, for the co-rotating floor)
+from the contact model (the soft kernel's own arrays, or one batch read of the rigid bodies),
+every listed kick changes the velocity array in place in registry order, each a velocity
+change over dt that never reverses the velocity it opposes, and one write sets them (none for
+the kernel's arrays). A kick computes in Chipmunk's internal units whatever units the arrays
+are in, dividing by their unit on the way in and multiplying on the way out. Effects that are constraints (hinge friction, drive) are pymunk motors.
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
@@ -82,12 +84,10 @@ class Kick(Effect):
         self.needs_positions = False
         """Whether :meth:`kick` needs the granules' positions."""
 
-    def kick(
-        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> None:
-        """Change the granules' ``velocities`` in place by one step of ``dt`` of this effect
-        (internal units; ``positions`` given if :attr:`needs_positions`; ``granules`` their
-        masses and radii, SI) and count the energy."""
+    def kick(self, granules: Granules, dt: float) -> None:
+        """Change the ``granules``' velocities in place by one step of ``dt`` (internal time
+        units) of this effect and count the energy (internal units); their positions are given
+        if :attr:`needs_positions`."""
         raise NotImplementedError
 
 
@@ -107,16 +107,23 @@ class KickRunner:
         """Kick every granule over ``dt`` (internal time units)."""
         if self.granules.count == 0:
             return
-        velocities, positions = self.granules.read_internal(positions=self._positions)
-        granules = Granules(*self.granules.constants())
+        granules = Granules(
+            *self.granules.read(positions=self._positions), *self.granules.constants()
+        )
         for effect in self.kicks:
-            effect.kick(velocities, positions, granules, dt)
-        self.granules.write_internal_velocities(velocities)
+            effect.kick(granules, dt)
+        self.granules.write_velocities(granules.velocities)
 
 
 class Granules(NamedTuple):
-    """What a kick needs of the granules besides their motion: masses (kg), radii (m)."""
+    """The granules a kick changes: velocities (n, 2) and positions (n, 2) or None in the
+    contact model's units, the internal velocity and length units in those
+    (:class:`~perga.contact.protocol.GranuleKinematics`), masses (kg), radii (m)."""
 
+    velocities: FloatArray
+    positions: FloatArray | None
+    velocity_unit: float
+    length_unit: float
     masses: FloatArray
     radii: FloatArray
 
@@ -195,9 +202,10 @@ class ConstraintLosses(Effect):
             self._impulses = JointImpulses([c for c, _, _ in self._watched])
             rows = [(a, b) for _, a, b in self._watched]
             self._rows = np.array(rows, dtype=np.int64).reshape(-1, 2)
-        self._removed = _constraint_losses(
-            self._removed, self._impulses.read(), self._rows, before.omega, after.omega
-        )
+        if self._rows.size:
+            self._removed = _constraint_losses(
+                self._removed, self._impulses.views(), self._rows, before.table, after.table
+            )
 
 
 @_register
@@ -257,14 +265,14 @@ class FloorFriction(Kick):
         self._rotor = machine.rotor if spec.floor == "corotating" else None
         self.needs_positions = self._rotor is not None
 
-    def kick(
-        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> None:
+    def kick(self, granules: Granules, dt: float) -> None:
+        g = granules
         omega = 0.0 if self._rotor is None else self._rotor.angular_velocity
-        where = velocities if positions is None else positions  # unused without a rotor
+        where = g.velocities if g.positions is None else g.positions  # unused without a rotor
         removed, supplied = _floor_kick(
-            velocities, where, granules.masses, self._deceleration * dt, omega
-        )
+            g.velocities, where, g.masses, self._deceleration * dt, omega, g.velocity_unit,
+            g.length_unit,
+        )  # fmt: skip
         self._removed += removed
         self._supplied += supplied
 
@@ -282,9 +290,7 @@ class AirDrag(Kick):
         super().__init__()
         self._spec = spec
 
-    def kick(
-        self, velocities: FloatArray, positions: FloatArray | None, granules: Granules, dt: float
-    ) -> None:
+    def kick(self, granules: Granules, dt: float) -> None:
         s = self._spec
         k = (
             0.5
@@ -295,45 +301,60 @@ class AirDrag(Kick):
             * s.thickness
             / granules.masses
         ) / (1.0 / u.LENGTH)
-        self._removed += _drag_kick(velocities, k * dt, granules.masses)
+        self._removed += _drag_kick(
+            granules.velocities, k * dt, granules.masses, granules.velocity_unit
+        )
 
 
 @numba.njit(cache=True, fastmath=False)
 def _constraint_losses(
-    removed: float, impulses: np.ndarray, rows: np.ndarray, w0: np.ndarray, w1: np.ndarray
+    removed: float,
+    impulses: tuple[np.ndarray, ...],
+    rows: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
 ) -> float:
     """``removed`` less j·ω̄_rel for each constraint (:meth:`ConstraintLosses.account`): angular
-    impulse ``impulses[c]`` on body ``rows[c, 1]`` against ``rows[c, 0]``, ω̄_rel the mean of
-    their relative angular velocity at the step's start (``w0``) and end (``w1``), in turn."""
+    impulse ``impulses[c][0]`` (its jAcc in place) on body ``rows[c, 1]`` against ``rows[c, 0]``,
+    ω̄_rel the mean of their relative angular velocity at the step's start and end (column 5
+    of the machine-state tables ``before`` and ``after``), in turn."""
     for c in range(rows.shape[0]):
         a = rows[c, 0]
         b = rows[c, 1]
-        removed -= impulses[c] * (0.5 * ((w0[b] - w0[a]) + (w1[b] - w1[a])))
+        rel = (before[b, 5] - before[a, 5]) + (after[b, 5] - after[a, 5])
+        removed -= impulses[c][0] * (0.5 * rel)
     return removed
 
 
 @numba.njit(cache=True, fastmath=False)
 def _floor_kick(
-    v: FloatArray, x: FloatArray, m: FloatArray, dv_max: float, omega: float
+    v: FloatArray,
+    x: FloatArray,
+    m: FloatArray,
+    dv_max: float,
+    omega: float,
+    velocity_unit: float,
+    length_unit: float,
 ) -> tuple[float, float]:
     """Floor friction on every granule in place (:class:`FloorFriction`): the velocity relative
     to the floor (ω × x; ω = 0 for a stationary floor) loses at most ``dv_max`` of its length;
-    returns the energy removed and the floor's work, Σ over granules (masses ``m`` in kg,
+    returns the energy removed and the floor's work, Σ over granules (masses ``m`` in kg, ``v``
+    and ``x`` in the units whose internal ones are ``velocity_unit`` and ``length_unit``,
     everything else and the results in internal units)."""
     removed = 0.0
     supplied = 0.0
     for i in range(v.shape[0]):
-        fx = -omega * x[i, 1]
-        fy = omega * x[i, 0]
-        rx = v[i, 0] - fx
-        ry = v[i, 1] - fy
+        fx = -omega * (x[i, 1] / length_unit)
+        fy = omega * (x[i, 0] / length_unit)
+        rx = v[i, 0] / velocity_unit - fx
+        ry = v[i, 1] / velocity_unit - fy
         speed = math.sqrt(rx * rx + ry * ry)
         if speed > 0.0:
             scale = 1.0 - min(dv_max, speed) / speed
             ax = rx * scale
             ay = ry * scale
-            v[i, 0] = fx + ax
-            v[i, 1] = fy + ay
+            v[i, 0] = (fx + ax) * velocity_unit
+            v[i, 1] = (fy + ay) * velocity_unit
             mass = m[i] / MASS
             removed += 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
             supplied += mass * ((ax - rx) * fx + (ay - ry) * fy)
@@ -341,18 +362,21 @@ def _floor_kick(
 
 
 @numba.njit(cache=True, fastmath=False)
-def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray) -> float:
+def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: float) -> float:
     """Quadratic drag on every granule in place (:class:`AirDrag`): |v'| = |v|/(1 + k|v|dt),
-    ``k_dt`` = k·dt per granule; returns the energy removed (masses ``m`` in kg, everything
-    else and the result in internal units)."""
+    ``k_dt`` = k·dt per granule; returns the energy removed (masses ``m`` in kg, ``v`` in the
+    units whose internal one is ``velocity_unit``, everything else and the result in internal
+    units)."""
     removed = 0.0
     for i in range(v.shape[0]):
-        speed = math.sqrt(v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1])
+        vx = v[i, 0] / velocity_unit
+        vy = v[i, 1] / velocity_unit
+        speed = math.sqrt(vx * vx + vy * vy)
         if speed > 0.0:
             after = speed / (1.0 + k_dt[i] * speed)
             ratio = after / speed
-            v[i, 0] *= ratio
-            v[i, 1] *= ratio
+            v[i, 0] = (vx * ratio) * velocity_unit
+            v[i, 1] = (vy * ratio) * velocity_unit
             removed += 0.5 * (m[i] / MASS) * (speed * speed - after * after)
     return removed
 

@@ -51,10 +51,10 @@ The terms:
   residual itself (J) is kept beside it, so that a long run whose work done has grown large
   still shows its absolute error.
 
-Costs per step: numpy over the few rotor-driven bodies of the machine's states before and after
-the step (:meth:`~perga.engine.machine.Machine.state`, one batch read each, which the simulation
-also hands to the contact model); the constraint effects' losses from the same states and each
-constraint's impulse; a loop over all bodies only when :meth:`EnergyMeter.terms` is called.
+Costs per step: one compiled call over the few rotor-driven bodies of the machine's states
+before and after the step (:meth:`~perga.engine.machine.Machine.state`, which the simulation
+also hands to the contact model) and the pins' impulses in place; one per constraint effect for
+its losses; a loop over all bodies only when :meth:`EnergyMeter.terms` is called.
 """
 
 from __future__ import annotations
@@ -73,6 +73,8 @@ from perga.model.records import LedgerTerms
 
 STATIC = -1
 """A pin's body row standing for the space's static body (:func:`_pivot_work`)."""
+_NO_PINS = (np.zeros(2),)
+"""The pins' impulses where there is no pin (numba cannot take an empty tuple)."""
 
 
 def _kinetic(body: pymunk.Body) -> float:
@@ -140,21 +142,19 @@ class EnergyMeter:
         assert before is not None, "after_step without before_step"
         for effect in self._constraints:
             effect.account(before, state)
-        if self._pin_rows.size:
-            self._correction += _pivot_work(
-                before.table,
-                state.table,
-                self._pin_rows,
-                self._pin_arms,
-                self._pins.read().reshape(-1, 2),
-            )
-        if not self._needs_balance:
+        if not (self._pin_rows.size or self._needs_balance):
             return
         gx, gy = self._gravity
-        moment = _moment_change(
-            before.table, state.table, self._rows, self._mass, self._moment, gx * dt, gy * dt
-        )
-        self._drive += 0.5 * (before.table[0, 5] + state.table[0, 5]) * (moment - contact_moment)
+        work, moment = _machine_terms(
+            before.table, state.table, self._pin_rows, self._pin_arms,
+            self._pins.views() or _NO_PINS,
+            self._rows, self._mass, self._moment, gx * dt, gy * dt,
+        )  # fmt: skip
+        self._correction += work
+        if self._needs_balance:
+            self._drive += (
+                0.5 * (before.table[0, 5] + state.table[0, 5]) * (moment - contact_moment)
+            )
 
     def terms(self) -> LedgerTerms:
         """The cumulative terms of the machine's bodies and the effects now, in J."""
@@ -185,6 +185,29 @@ class EnergyMeter:
 
 
 @numba.njit(cache=True)
+def _machine_terms(
+    before: np.ndarray,
+    after: np.ndarray,
+    pin_rows: np.ndarray,
+    pin_arms: np.ndarray,
+    impulses: tuple[np.ndarray, ...],
+    rows: np.ndarray,
+    mass: np.ndarray,
+    moment: np.ndarray,
+    gx_dt: float,
+    gy_dt: float,
+) -> tuple[float, float]:
+    """The step's terms from two machine-state tables (:class:`~perga.engine.machine.
+    MachineState`): the pins' work (:func:`_pivot_work`, pin k's jAcc ``impulses[k]`` in place)
+    and the angular impulse on the bodies at ``rows`` besides gravity's
+    (:func:`_moment_change`)."""
+    return (
+        _pivot_work(before, after, pin_rows, pin_arms, impulses),
+        _moment_change(before, after, rows, mass, moment, gx_dt, gy_dt),
+    )
+
+
+@numba.njit(cache=True)
 def _moment_change(
     before: np.ndarray,
     after: np.ndarray,
@@ -209,12 +232,16 @@ def _moment_change(
 
 @numba.njit(cache=True)
 def _pivot_work(
-    before: np.ndarray, after: np.ndarray, rows: np.ndarray, arms: np.ndarray, impulses: np.ndarray
+    before: np.ndarray,
+    after: np.ndarray,
+    rows: np.ndarray,
+    arms: np.ndarray,
+    impulses: tuple[np.ndarray, ...],
 ) -> float:
     """Σ J·(v̄_b − v̄_a) over pivot joints: the work their position correction did in a step
     (an ideal pin does none). Joint k joins the bodies at ``rows[k]`` = (a, b) of two
     machine-state tables, b = :data:`STATIC` for the static body (at rest, its frame the
-    world's); J = ``impulses[k]`` acts on b at its anchor, ``arms[k]`` from b's centre of
+    world's); J = ``impulses[k]`` (2,) acts on b at its anchor, ``arms[k]`` from b's centre of
     gravity in b's frame; v̄ is each body's velocity at that point, the mean of before and after
     the step, at the lever arm of the step's new positions (where Chipmunk applies the
     impulse)."""
@@ -236,5 +263,5 @@ def _pivot_work(
         wa = 0.5 * (before[a, 5] + after[a, 5])
         vax = 0.5 * (before[a, 3] + after[a, 3]) - wa * ray
         vay = 0.5 * (before[a, 4] + after[a, 4]) + wa * rax
-        total += impulses[k, 0] * (vbx - vax) + impulses[k, 1] * (vby - vay)
+        total += impulses[k][0] * (vbx - vax) + impulses[k][1] * (vby - vay)
     return total

@@ -43,7 +43,8 @@ from perga.model.spec import GranuleSpec
 
 
 class _Kinematics:
-    """The granule bodies' velocities for the kicks (a writer rebuilt when granules change)."""
+    """The granule bodies' velocities for the kicks, read from the space in internal units (a
+    writer rebuilt when granules change)."""
 
     def __init__(self, model: RigidContacts) -> None:
         self._model = model
@@ -55,10 +56,10 @@ class _Kinematics:
     def constants(self) -> tuple[FloatArray, FloatArray]:
         return self._model.masses, self._model.radii
 
-    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
-        return self._model.writer().read_internal(positions=positions)
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
+        return (*self._model.writer().read_internal(positions=positions), 1.0, 1.0)
 
-    def write_internal_velocities(self, velocities: FloatArray) -> None:
+    def write_velocities(self, velocities: FloatArray) -> None:
         self._model.writer().write_internal_velocities(velocities)
 
 

@@ -47,7 +47,7 @@ ANGULAR_IMPULSE = u.FORCE * u.LENGTH * u.TIME
 
 
 class _Kinematics:
-    """The soft granules' velocities for the kicks, in Chipmunk's internal units."""
+    """The soft granules' velocities for the kicks: the kernel's own arrays, SI."""
 
     def __init__(self, granules: SoftGranules) -> None:
         self._g = granules
@@ -59,11 +59,12 @@ class _Kinematics:
     def constants(self) -> tuple[FloatArray, FloatArray]:
         return self._g.m, self._g.r
 
-    def read_internal(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
-        return self._g.v / u.VELOCITY, self._g.x / u.LENGTH if positions else None
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
+        return self._g.v, self._g.x if positions else None, u.VELOCITY, u.LENGTH
 
-    def write_internal_velocities(self, velocities: FloatArray) -> None:
-        np.multiply(velocities, u.VELOCITY, out=self._g.v)  # in place: no temporary
+    def write_velocities(self, velocities: FloatArray) -> None:
+        if velocities is not self._g.v:
+            self._g.v[:] = velocities
 
 
 class SoftContacts:
