@@ -11,7 +11,8 @@ from the contact model (the soft kernel's own arrays, or one batch read of the r
 every listed kick changes the velocity array in place in registry order, each a velocity
 change over dt that never reverses the velocity it opposes, and one write sets them (none for
 the kernel's arrays). A kick computes in Chipmunk's internal units whatever units the arrays
-are in, dividing by their unit on the way in and multiplying on the way out. Effects that are constraints (hinge friction, drive) are pymunk motors.
+are in, dividing by their unit on the way in and multiplying on the way out. Effects that are
+constraints (hinge friction, drive) are pymunk motors.
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
