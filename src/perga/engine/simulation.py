@@ -134,8 +134,9 @@ class Simulation:
 
     def _process(self, time: float) -> None:
         """Step 8 of the order (module doc)."""
-        new = self.contacts.impacts[self._seen :]
-        if new:
+        impacts = self.contacts.impacts
+        if len(impacts) > self._seen:
+            new = impacts[self._seen :]
             self._seen += len(new)
             sizes = dict(zip(*self._ids_and_sizes(), strict=True)) if self.damage else {}
             for impact in new:
@@ -145,9 +146,10 @@ class Simulation:
                 self.impacts.append(impact)
                 self.impact_counts[impact.granule] = self.impact_counts.get(impact.granule, 0) + 1
         releases = self.contacts.releases
-        for release in releases[self._releases_seen :]:
-            self.entered[release.granule] = release.time
-        self._releases_seen = len(releases)
+        if len(releases) > self._releases_seen:
+            for release in releases[self._releases_seen :]:
+                self.entered[release.granule] = release.time
+            self._releases_seen = len(releases)
         if self.damage is not None:
             self.removed_broken += self.damage.run(self, time)
         if self.outlet is not None:

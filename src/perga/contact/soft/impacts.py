@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -31,6 +32,9 @@ from perga.contact.soft.polygon_set import (
 )
 from perga.geometry.disc_polygon import closest_feature
 from perga.model.records import HammerState, Impact
+
+if TYPE_CHECKING:
+    from perga.engine.machine import MachineState
 
 
 @dataclass(frozen=True)
@@ -113,15 +117,11 @@ class SoftImpactLog:
 
     def before(self) -> None:
         """Keep the granules' and polygons' state before a kernel call (starts need it)."""
-        g = self._g
+        g, p = self._g, self._g.polygons
         if self._x.shape != g.x.shape:
-            self._x, self._v, self._w = g.x.copy(), g.v.copy(), g.w.copy()
-        else:
-            self._x[:] = g.x
-            self._v[:] = g.v
-            self._w[:] = g.w
-        self._vertices[:] = g.polygons.vertices
-        self._com[:] = g.polygons.com
+            self._x, self._v, self._w = np.empty_like(g.x), np.empty_like(g.v), np.empty_like(g.w)
+        _keep(g.x, g.v, g.w, p.vertices, p.com, self._x, self._v, self._w, self._vertices,
+              self._com)  # fmt: skip
 
     def rows_changed(self, keep: np.ndarray, added: int) -> None:
         """Granule rows were removed (``keep``: the old rows that stay) and ``added`` appended:
@@ -133,14 +133,15 @@ class SoftImpactLog:
         )
         self._ids_before = self._ids().copy()
 
-    def after(self, time: float, angles: np.ndarray) -> None:
-        """Open and close impacts after a kernel call; ``time``: end of the step, s;
-        ``angles``: each hammer's body angle now, rad. The flags are compared only when the
-        kernel counted a change since the last look (``SoftGranules.counts``)."""
+    def after(self, time: float, machine: MachineState, hammer_rows: np.ndarray) -> None:
+        """Open and close impacts after a kernel call; ``time``: end of the step, s; ``machine``
+        the machine now, hammer h's body in its row ``hammer_rows[h]``. The flags are compared
+        only when the kernel counted a change since the last look (``SoftGranules.counts``)."""
         g = self._g
         seen = int(g.counts[COUNT_CONTACT_CHANGES])
         if seen == self._seen:
             return
+        angles = machine.angle[hammer_rows]  # each hammer's body angle now, rad
         self._seen = seen
         hist = g.polygon_hist
         if self._changes.shape[0] < self._active.size:
@@ -217,6 +218,16 @@ class SoftImpactLog:
                 peak_pressure=pressure,
             )
         )
+
+
+@numba.njit(cache=True)
+def _keep(x, v, w, vertices, com, x_out, v_out, w_out, vertices_out, com_out):
+    """Copy the granules' and polygons' state into the log's arrays of the same shapes."""
+    x_out[:] = x
+    v_out[:] = v
+    w_out[:] = w
+    vertices_out[:] = vertices
+    com_out[:] = com
 
 
 @numba.njit(cache=True)

@@ -169,7 +169,7 @@ class SoftContacts:
         returns the loads' angular impulse about the axis on the rotor-driven hammers over the
         step, internal units."""
         if self.log is not None:
-            self.log.after(time, machine.angle[self._hammer_rows])
+            self.log.after(time, machine, self._hammer_rows)
         g = self.granules
         released = int(g.counts[COUNT_RELEASES])
         if not self._bonds or released == self._released:
