@@ -337,17 +337,14 @@ def _pair_range(
     lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
     out,
 ):  # fmt: skip
-    """Pair forces of the list rows lo:hi (granules i) into out (n, 3) = (fx, fy, torque), which
-    it zeroes first; returns the energy those contacts dissipated, J. Arguments as in
-    ``pair_forces``. A pair farther apart than r_i + r_j + reach that holds no spring has no
-    force and nothing to release: it is skipped before ``pair_force``, whose zeros would
-    otherwise be added. Numba wraps a negative index around unless the compiler can prove it
-    non-negative, so i starts at max(lo, 0) and an entry j < 0 (there is none) is skipped: the
-    wraparound is then dropped from every index below (docs/performance.md)."""
-    for i in range(out.shape[0]):
-        out[i, 0] = 0.0
-        out[i, 1] = 0.0
-        out[i, 2] = 0.0
+    """Pair forces of the list rows lo:hi (granules i) added into out (n, 3) = (fx, fy, torque),
+    which holds zeros (the per-granule pass zeroes each row it reads); returns the energy those
+    contacts dissipated, J. Arguments as in ``pair_forces``. A pair farther apart than r_i + r_j +
+    reach that holds no spring has no force and nothing to release: it is skipped before
+    ``pair_force``, whose zeros would otherwise be added. Numba wraps a negative index around unless
+    the compiler can prove it non-negative, so i starts at max(lo, 0) and an entry j < 0 (there is
+    none) is skipped: the wraparound is then dropped from every index below
+    (docs/performance.md)."""
     dissipated = 0.0
     for i in range(max(lo, 0), hi):
         xi = x[i, 0]
@@ -383,12 +380,12 @@ def pair_forces(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
     lost,
 ):  # fmt: skip
-    """Pair forces of the list (start, nbr, hist) into acc (n_chunks, n, 3) = (fx, fy, torque),
-    one slice per chunk of i, in parallel; the energy the chunk's contacts dissipated into
-    lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and ``NeighbourList``: this loop is
-    the kernel's hottest, and it ran slower taking the bundles (docs/performance.md); reach (m)
-    and tangential: as in ``pair_force``. One chunk runs in ``_pair_forces_serial`` (no
-    parallel region to open)."""
+    """Pair forces of the list (start, nbr, hist) added into acc (n_chunks, n, 3) = (fx, fy,
+    torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
+    contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
+    ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
+    (docs/performance.md); reach (m) and tangential: as in ``pair_force``. One chunk runs in
+    ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
@@ -549,14 +546,14 @@ def mark_special(wall_gap, covered, cstart, held, flags, order):
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _integrate_free(
-    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity
+    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity, keep
 ):  # fmt: skip
     """The free path of ``_integrate_range``: every granule i of lo:hi not flagged sums its pair
-    forces (acc, into f and tq) and moves (``_kick_drift_one``); returns their (max
-    displacement², max speed², max extrapolated speed²) (``_motion_of``). A function of its
-    own, not inlined: the small loop compiles tighter than inside the full path's function
-    (docs/performance.md). Compiled as the passes are (parallel=True, error_model="numpy": the
-    same arithmetic)."""
+    forces (acc, whose rows it zeroes for the next pair pass; into f and tq if keep) and moves
+    (``_kick_drift_one``); returns their (max displacement², max speed², max extrapolated speed²)
+    (``_motion_of``). A function of its own, not inlined: the small loop compiles tighter than
+    inside the full path's function (docs/performance.md). Compiled as the passes are
+    (parallel=True, error_model="numpy": the same arithmetic)."""
     n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
@@ -572,9 +569,13 @@ def _integrate_free(
             fx += acc[q, i, 0]
             fy += acc[q, i, 1]
             t += acc[q, i, 2]
-        f[i, 0] = fx
-        f[i, 1] = fy
-        tq[i] = t
+            acc[q, i, 0] = 0.0
+            acc[q, i, 1] = 0.0
+            acc[q, i, 2] = 0.0
+        if keep:
+            f[i, 0] = fx
+            f[i, 1] = fy
+            tq[i] = t
         _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
         d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
         dmax = max(dmax, d2)
@@ -591,17 +592,19 @@ def _integrate_range(
 ):  # fmt: skip
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
     fields, cand's), walls_near = (wall_gap (``wall_gaps``), flags, order) and scalars = (dt,
-    damp = 1/(1 + drag·dt), v_cap, step, reach, near, gravity) (tuples: a call of more than 30
-    arguments compiles to one numba cannot inline): a granule's walls are evaluated only where
-    wall_gap ≤ near; returns the range's (max displacement², max speed², wall dissipation, max
-    extrapolated speed², polygon contacts opened or closed, granules released) (``_integrate``).
+    damp = 1/(1 + drag·dt), v_cap, step, reach, near, gravity, keep) (tuples: a call of more
+    than 30 arguments compiles to one numba cannot inline): a granule's walls are evaluated only
+    where wall_gap ≤ near; the total force and torque go to f and tq only if keep (the call's
+    last step, whose forces alone are read after the call); returns the range's (max
+    displacement², max speed², wall dissipation, max extrapolated speed², polygon contacts
+    opened or closed, granules released) (``_integrate``).
 
     Two loops over disjoint granules: the flagged ones (``mark_special``: every granule that
     can reach a wall or a polygon or is held; order lists them) take the full path in index
     order, then every other granule only sums its pair forces and moves (``_integrate_free``).
     A granule's step reads and writes only its own state (and its candidate entries), so the
     split gives the same floats."""
-    dt, damp, v_cap, step, reach, near, gravity = scalars
+    dt, damp, v_cap, step, reach, near, gravity, keep = scalars
     wall_gap, flags, order = walls_near
     n_chunks = acc.shape[0]
     h = 0.5 * dt
@@ -625,6 +628,9 @@ def _integrate_range(
             fx += acc[q, i, 0]
             fy += acc[q, i, 1]
             t += acc[q, i, 2]
+            acc[q, i, 0] = 0.0
+            acc[q, i, 1] = 0.0
+            acc[q, i, 2] = 0.0
         for e in range(cstart[i], cstart[i + 1]):
             was = phist[i, cpoly[e], HIST_ACTIVE] != 0.0
             now, px, py, ti, tk, de = polygon_contact(
@@ -638,9 +644,10 @@ def _integrate_range(
             ploads[e, 1] = -py
             ploads[e, 2] = tk
             ploads[e, 3] = de
-        f[i, 0] = fx
-        f[i, 1] = fy
-        tq[i] = t
+        if keep:
+            f[i, 0] = fx
+            f[i, 1] = fy
+            tq[i] = t
         if held[i]:
             load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
             if load <= bond_force[i]:
@@ -661,8 +668,9 @@ def _integrate_range(
         smax = max(smax, s2)
         umax = max(umax, u2)
     fmax = _integrate_free(
-        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity
-    )
+        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity,
+        keep,
+    )  # fmt: skip
     dmax = max(dmax, fmax[0])
     smax = max(smax, fmax[1])
     umax = max(umax, fmax[2])
@@ -676,7 +684,8 @@ def _integrate(
 ):  # fmt: skip
     """Fused per-granule pass: wall and polygon forces, sum of chunks, kick-drift, displacement².
 
-    Writes the step's total contact force and torque to work.f and work.tq; chunk[c] = (max
+    Writes the step's total contact force and torque to work.f and work.tq at the call's last
+    step (settings.first_step + settings.n_steps − 1); chunk[c] = (max
     displacement² since the list build (m²), max speed² (m²/s²), wall dissipation (J), max
     extrapolated speed² |v + ½ dt a_prev|² for the next step (m²/s²), polygon contacts opened
     or closed, granules released) of chunk c (per-chunk values instead of shared reduction
@@ -708,7 +717,8 @@ def _integrate(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
             params, rows, wall_hist, walls_near, acc, f, tq, held, bond_force, released_step,
             release_force, poly, table, phist, rho, cstart, cpoly, ploads, x_ref,
-            (dt, damp, v_cap, step, reach, near, gravity),
+            (dt, damp, v_cap, step, reach, near, gravity,
+             step == settings.first_step + settings.n_steps - 1),
         )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
@@ -736,7 +746,8 @@ def _integrate_serial(
             params, walls.rows, walls.hist, walls_near, work.acc, work.f, work.tq, held,
             bond_force, released_step, release_force, poly, table, phist, rho, cand.start,
             cand.polygon, cand.loads, x_ref,
-            (settings.dt, damp, settings.v_cap, step, reach, near, settings.gravity),
+            (settings.dt, damp, settings.v_cap, step, reach, near, settings.gravity,
+             step == settings.first_step + settings.n_steps - 1),
         )  # fmt: skip
         chunk[c, 0] = dmax
         chunk[c, 1] = smax
@@ -785,8 +796,9 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     its class and field names on every call, which costs more than the kernel on small systems
     (docs/performance.md), so ``SoftGranules.step`` passes plain tuples.
 
-    settings.pairs False skips granule-granule contacts (no pair list built, no pair loop;
-    work.acc must then hold zeros, as ``new_accumulator`` makes it).
+    work.acc must hold zeros, as ``new_accumulator`` makes it: the pair pass adds into it and
+    the per-granule pass zeroes each row after reading it (one pass over it fewer a step).
+    settings.pairs False skips granule-granule contacts (no pair list built, no pair loop).
 
     Rebuilds the neighbour list (carrying the tangential history over) before a step when
     2·(largest displacement since the last build) + dt·(largest speed) exceeds the skin (the
