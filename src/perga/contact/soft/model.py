@@ -138,7 +138,7 @@ class SoftContacts:
         return self.ids
 
     def kinematics(self) -> _Kinematics:
-        """The granules' velocities (the kernel's arrays) in internal units."""
+        """The granules' velocities and positions for the kicks: the kernel's arrays, SI."""
         return _Kinematics(self.granules)
 
     def before_machine_step(self, time: float, machine: MachineState) -> None:
