@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -143,32 +144,47 @@ VIEW_TRANSFORM = _TX - 4 - _BODY.start
 angle, angular velocity, torque, transform (6: a b c d tx ty)."""
 
 
-class BodyViews:
-    """A numpy view of each of ``bodies``' C structs (cpBody's doubles m to the transform,
-    indices ``VIEW_*``), so that compiled code reads a body's state and sets its force
-    and torque without a call into Chipmunk. Made at the first :meth:`views`, each checked then
-    against pymunk's getters (as :func:`capture`) and by a marked force and torque set through
-    pymunk and read back raw. Writing ``f`` and ``t`` raw is pymunk's setter without
-    ``cpBodyActivate``, which only wakes sleeping bodies: refused for a space that lets bodies
-    sleep. The views live as long as this object holds the bodies; pickled as the bodies alone
-    (the views are made again)."""
+class _StructViews:
+    """Numpy views of the C structs of pymunk objects ``items``, one per object, made (and
+    checked, :meth:`_view`) at the first :meth:`views`; they live as long as this object holds
+    the objects. Pickled as the objects alone (the views are made again)."""
 
-    def __init__(self, bodies: list[pymunk.Body]) -> None:
-        self.bodies = bodies
+    def __init__(self, items: list[Any]) -> None:
+        self.items = items
         self._views: tuple[NDArray[np.float64], ...] | None = None
 
     def __getstate__(self) -> dict[str, object]:
-        return {"bodies": self.bodies}
+        return {"items": self.items}
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
         self._views = None
 
     def views(self) -> tuple[NDArray[np.float64], ...]:
-        """One writable (21,) view per body, in the bodies' order."""
+        """One writable view per object, in their order."""
         if self._views is None:
-            self._views = tuple(_body_view(b) for b in self.bodies)
+            self._views = tuple(self._view(item) for item in self.items)
         return self._views
+
+    def _view(self, item: Any) -> NDArray[np.float64]:
+        """The checked view of ``item``'s struct."""
+        raise NotImplementedError
+
+
+class BodyViews(_StructViews):
+    """A (21,) view of each of ``bodies``' C structs (cpBody's doubles m to the transform,
+    indices ``VIEW_*``), so that compiled code reads a body's state and sets its force and
+    torque without a call into Chipmunk; each checked against pymunk's getters (as
+    :func:`capture`) and by a marked force and torque set through pymunk and read back raw.
+    Writing ``f`` and ``t`` raw is pymunk's setter without ``cpBodyActivate``, which only wakes
+    sleeping bodies: refused for a space that lets bodies sleep."""
+
+    @property
+    def bodies(self) -> list[pymunk.Body]:
+        return self.items
+
+    def _view(self, item: Any) -> NDArray[np.float64]:
+        return _body_view(item)
 
 
 def _body_view(body: pymunk.Body) -> NDArray[np.float64]:
@@ -192,38 +208,26 @@ def _body_view(body: pymunk.Body) -> NDArray[np.float64]:
     return view
 
 
-class JointImpulses:
-    """The accumulated impulses of joints (jAcc: a PivotJoint's J, (x, y), applied +J to its
-    body b and −J to a; a SimpleMotor's or RotaryLimitJoint's angular j, +j on b), read raw
-    after every step: the layout is checked at the first read, which also makes a numpy view of
-    each joint's jAcc in Chipmunk's memory (held while the joints are); then each read is one
-    concatenation of the views. Pickled as the joints alone (the views are made again)."""
+class JointImpulses(_StructViews):
+    """The accumulated impulses of ``joints`` (jAcc: a PivotJoint's J, (x, y), applied +J to
+    its body b and −J to a; a SimpleMotor's or RotaryLimitJoint's angular j, +j on b), read raw
+    after every step: a view of each joint's jAcc in its struct (two doubles for a pivot, one
+    otherwise, internal units), its layout checked when the view is made."""
 
-    def __init__(self, joints: list[pymunk.Constraint]) -> None:
-        self.joints = joints
-        self._views: tuple[NDArray[np.float64], ...] | None = None
+    @property
+    def joints(self) -> list[pymunk.Constraint]:
+        return self.items
 
-    def __getstate__(self) -> dict[str, object]:
-        return {"joints": self.joints}
-
-    def __setstate__(self, state: dict[str, object]) -> None:
-        self.__dict__.update(state)
-        self._views = None
-
-    def views(self) -> tuple[NDArray[np.float64], ...]:
-        """Each joint's jAcc as a view of its struct (two doubles for a pivot, one otherwise),
-        internal units; read in place by compiled code."""
-        if self._views is None:
-            self._views = tuple(_view(j, *_joint_layout(j)) for j in self.joints)
-        return self._views
+    def _view(self, item: Any) -> NDArray[np.float64]:
+        return _joint_view(item, *_joint_layout(item))
 
     def read(self) -> NDArray[np.float64]:
-        """Every joint's jAcc, one after the other (two doubles for a pivot), internal units."""
+        """Every joint's jAcc, one after the other, internal units (a fresh array)."""
         views = self.views()
         return np.concatenate(views) if views else np.zeros(0)
 
 
-def _view(joint: pymunk.Constraint, first: int, length: int) -> NDArray[np.float64]:
+def _joint_view(joint: pymunk.Constraint, first: int, length: int) -> NDArray[np.float64]:
     """The doubles first:first + length of ``joint``'s C struct, a writable view."""
     raw = _doubles(joint._constraint)
     return np.frombuffer(ffi.buffer(raw + first, length * ffi.sizeof("double")), dtype=np.float64)
