@@ -5,6 +5,8 @@ contact-model class, no private member of another package read."""
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -192,3 +194,17 @@ def test_no_private_member_of_another_package_is_read() -> None:
             ):
                 bad.append(f"{module}:{node.lineno}: {ast.unparse(node)}")
     assert bad == []
+
+
+def test_a_run_does_not_load_the_mesh_libraries() -> None:
+    """trimesh and scipy.stats are imported where a mesh is read or cut, or a size
+    distribution drawn, not by the modules every run loads: together they cost 0.35-0.6 s of
+    each run's start (docs/performance.md)."""
+    code = (
+        "import sys, perga.runner, perga.case, perga.output.vtk, perga.engine, perga.geometry;"
+        "print(sorted(m for m in ('trimesh', 'scipy.stats') if m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    assert out.strip() == "[]"

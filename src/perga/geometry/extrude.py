@@ -1,16 +1,19 @@
-"""Closed 3-D meshes of planar parts: an outline (with holes) extruded along z (trimesh)."""
+"""Closed 3-D meshes of planar parts: an outline (with holes) extruded along z (trimesh,
+imported where a mesh is made, not with the module: it costs half a second of a run's start)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike
-from scipy.spatial import Delaunay
 
 from perga.geometry.convex import triangulate
 from perga.geometry.polygon import as_points, contains, counter_clockwise, signed_area
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 def _cap(outline: ArrayLike, holes: Sequence[ArrayLike]) -> tuple[np.ndarray, np.ndarray]:
@@ -20,6 +23,8 @@ def _cap(outline: ArrayLike, holes: Sequence[ArrayLike]) -> tuple[np.ndarray, np
         return outer, np.array(triangulate(outer))
     loops = [outer, *(as_points(h) for h in holes)]
     vertices = np.vstack(loops)
+    from scipy.spatial import Delaunay
+
     triangles = Delaunay(vertices).simplices
     centres = vertices[triangles].mean(axis=1)
     keep = [contains(outer, c) and not any(contains(h, c) for h in loops[1:]) for c in centres]
@@ -41,6 +46,8 @@ def extrude(
 ) -> trimesh.Trimesh:
     """A closed mesh of the outline minus holes (m) from z = z0 to z0 + thickness (m)."""
     vertices, triangles = _cap(outline, holes)
+    import trimesh
+
     mesh = trimesh.creation.extrude_triangulation(vertices, triangles, thickness)
     mesh.apply_translation([0.0, 0.0, z0])
     if mesh.volume < 0:

@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from perga.geometry.properties import MassProperties
 from perga.geometry.units import GeometryError, unit_scale
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 def check_closed(mesh: trimesh.Trimesh, source: str) -> None:
@@ -40,6 +43,8 @@ def load_mesh(path: str | Path, units: str) -> trimesh.Trimesh:
 
     GeometryError naming the file for an unreadable, empty, open or non-manifold mesh.
     """
+    import trimesh  # here, not at import: it costs half a second of every run's start
+
     source = str(path)
     scale = unit_scale(units, source)
     try:

@@ -1,22 +1,23 @@
 """The outline of a closed mesh cut by the rotor plane z = height: an outer polygon and holes.
 
-Units: m.
+Units: m. trimesh and scipy's graph tools are imported where a mesh is cut, not with the
+module: a run whose parts are outlines never loads them (half a second of every run's start).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from perga.geometry.mass import check_closed, load_mesh
 from perga.geometry.polygon import FloatArray, clean, contains, signed_area
 from perga.geometry.units import GeometryError
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,10 @@ class Section:
 def _loops(segments: FloatArray, tol: float, source: str) -> list[FloatArray]:
     """Chain 2-D segments (n, 2, 2) into closed loops of points; merges ends closer than tol."""
     ends = segments.reshape(-1, 2)
+    from scipy.sparse import coo_matrix  # here, as trimesh (module doc)
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     pairs = cKDTree(ends).query_pairs(tol, output_type="ndarray")
     n = len(ends)
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
@@ -79,6 +84,8 @@ def section_mesh(
             f"{source}: the section plane z = {z:.6g} m misses the mesh "
             f"(it spans z = {z_min:.6g} .. {z_max:.6g} m)"
         )
+    import trimesh  # here, not at import (module doc)
+
     segments = trimesh.intersections.mesh_plane(mesh, [0.0, 0.0, 1.0], [0.0, 0.0, z])
     if len(segments) == 0:
         raise GeometryError(f"{source}: the section plane z = {z:.6g} m misses the mesh")

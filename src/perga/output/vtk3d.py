@@ -28,9 +28,9 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
@@ -39,6 +39,9 @@ from perga.geometry.polygon import FloatArray, clean, counter_clockwise, signed_
 from perga.geometry.wall import wall_pieces
 from perga.output import vtk_grid
 from perga.output.vtk_grid import TRIANGLE
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,8 @@ class Part:
     @property
     def mesh(self) -> trimesh.Trimesh:
         """The part as a trimesh (for volumes and checks)."""
+        import trimesh  # here, not at import: it costs half a second of a run's start
+
         return trimesh.Trimesh(self.vertices, self.triangles, process=False)
 
 
@@ -121,6 +126,8 @@ def wall(inner: ArrayLike, wall_thickness: float, height: float) -> Part:
         if signed_area(vertices[quad]) < 0:
             quad = quad[::-1]
         triangles += [quad[[0, 1, 2]], quad[[0, 2, 3]]]
+    import trimesh
+
     mesh = trimesh.creation.extrude_triangulation(vertices, np.array(triangles), height)
     mesh.apply_translation([0.0, 0.0, -0.5 * height])
     if mesh.volume < 0:
