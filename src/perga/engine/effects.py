@@ -344,18 +344,21 @@ def _floor_kick(
     everything else and the results in internal units)."""
     removed = 0.0
     supplied = 0.0
+    scaled = velocity_unit != 1.0  # a unit of 1 is not divided by: the same floats, faster
     for i in range(v.shape[0]):
         fx = -omega * (x[i, 1] / length_unit)
         fy = omega * (x[i, 0] / length_unit)
-        rx = v[i, 0] / velocity_unit - fx
-        ry = v[i, 1] / velocity_unit - fy
+        vx = v[i, 0] / velocity_unit if scaled else v[i, 0]
+        vy = v[i, 1] / velocity_unit if scaled else v[i, 1]
+        rx = vx - fx
+        ry = vy - fy
         speed = math.sqrt(rx * rx + ry * ry)
         if speed > 0.0:
             scale = 1.0 - min(dv_max, speed) / speed
             ax = rx * scale
             ay = ry * scale
-            v[i, 0] = (fx + ax) * velocity_unit
-            v[i, 1] = (fy + ay) * velocity_unit
+            v[i, 0] = (fx + ax) * velocity_unit if scaled else fx + ax
+            v[i, 1] = (fy + ay) * velocity_unit if scaled else fy + ay
             mass = m[i] / MASS
             removed += 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
             supplied += mass * ((ax - rx) * fx + (ay - ry) * fy)
@@ -369,15 +372,16 @@ def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: fl
     units whose internal one is ``velocity_unit``, everything else and the result in internal
     units)."""
     removed = 0.0
+    scaled = velocity_unit != 1.0  # as in _floor_kick
     for i in range(v.shape[0]):
-        vx = v[i, 0] / velocity_unit
-        vy = v[i, 1] / velocity_unit
+        vx = v[i, 0] / velocity_unit if scaled else v[i, 0]
+        vy = v[i, 1] / velocity_unit if scaled else v[i, 1]
         speed = math.sqrt(vx * vx + vy * vy)
         if speed > 0.0:
             after = speed / (1.0 + k_dt[i] * speed)
             ratio = after / speed
-            v[i, 0] = (vx * ratio) * velocity_unit
-            v[i, 1] = (vy * ratio) * velocity_unit
+            v[i, 0] = (vx * ratio) * velocity_unit if scaled else vx * ratio
+            v[i, 1] = (vy * ratio) * velocity_unit if scaled else vy * ratio
             removed += 0.5 * (m[i] / MASS) * (speed * speed - after * after)
     return removed
 
