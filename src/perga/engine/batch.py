@@ -1,6 +1,7 @@
-"""Bulk, checked reads of chosen bodies' state (the rigid granules, the machine's rotor and
-hammers), and the one bulk write of their velocities, through ``pymunk.batch`` (with the arbiter
-meter, :mod:`perga.contact.rigid.dissipation`, the places it is used).
+"""Bulk, checked reads of chosen bodies' state (the rigid granules) and of every body of a space
+(the rigid dissipation), and the one bulk write of their velocities, through ``pymunk.batch``
+(with the arbiter meter, :mod:`perga.contact.rigid.dissipation`, the places it is used). The
+machine's few bodies are read raw instead (:class:`~perga.engine.chipmunk_state.BodyViews`).
 
 Reading ``body.position`` for every body in a Python loop costs an attribute access per
 body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
@@ -74,11 +75,8 @@ _ALL = _F.POSITION | _F.ANGLE | _F.VELOCITY | _F.ANGULAR_VELOCITY
 _MOTION = _F.POSITION | _F.VELOCITY | _F.ANGULAR_VELOCITY
 _PV = _F.POSITION | _F.VELOCITY
 _V_ID = _F.VELOCITY | _F.BODY_ID
-_LOADS = _F.FORCE | _F.TORQUE
-_LOADS_ID = _LOADS | _F.BODY_ID
 _ALL_ID = _ALL | _F.BODY_ID
 _ALL_WIDTH = 6
-_NO_CENTRES = np.zeros((0, 2))
 
 
 class _BatchBuffer:
@@ -211,19 +209,12 @@ class BodyReader:
         p, v, w = self._read(_MOTION)
         return p * u.LENGTH, v * u.VELOCITY, w[:, 0] * u.ANGULAR_VELOCITY
 
-    def read_internal_space(
-        self, centres: FloatArray | None = None
-    ) -> tuple[NDArray[np.uintp], FloatArray, FloatArray]:
-        """Every body of the space and the chosen ones, internal units, from a single pass: the
-        ids of all bodies (in the batch walk's order), their rows (n_all, 6) and the chosen
-        bodies' rows (n, 6), each x, y (position), angle, vx, vy (velocity), ω (angular
-        velocity); fresh arrays. With ``centres`` (n, 2), the chosen rows' x, y are moved from
-        the body's local origin to the point ``centres[j]`` of its frame (its centre of
-        gravity)."""
+    def read_internal_space(self) -> tuple[NDArray[np.uintp], FloatArray]:
+        """Every body of the space, internal units, from a single pass: their ids (in the batch
+        walk's order) and rows (n_all, 6), each x, y (position), angle, vx, vy (velocity), ω
+        (angular velocity); fresh arrays."""
         ids, floats = self._fetch(_ALL_ID, _ALL_WIDTH)
-        out = np.empty((len(self._bodies), _ALL_WIDTH))
-        self._take(ids, floats, _NO_CENTRES if centres is None else centres, out)
-        return ids.copy(), floats.reshape(ids.size, _ALL_WIDTH).copy(), out
+        return ids.copy(), floats.reshape(ids.size, _ALL_WIDTH).copy()
 
     # --- internals ---------------------------------------------------------------------------
 
@@ -237,14 +228,12 @@ class BodyReader:
         table = floats.reshape(ids.size, width)[self._rows_of(ids)]  # fancy indexing: a copy
         return [table[:, c] for c in columns]
 
-    def _take(
-        self, ids: NDArray[np.uintp], floats: FloatArray, centres: FloatArray, out: FloatArray
-    ) -> None:
+    def _take(self, ids: NDArray[np.uintp], floats: FloatArray, out: FloatArray) -> None:
         """Copy the chosen bodies' rows of a fetch into ``out`` (one compiled call when the
         cached rows hold, the usual case)."""
-        if not _take_rows(floats, ids, self._rows, self._chosen(), centres, out):
+        if not _take_rows(floats, ids, self._rows, self._chosen(), out):
             self._rows = self._locate(ids)
-            _take_rows(floats, ids, self._rows, self._ids, centres, out)
+            _take_rows(floats, ids, self._rows, self._ids, out)
 
     def _rows_of(self, ids: NDArray[np.uintp]) -> NDArray[np.intp]:
         """The chosen bodies' rows in a batch read whose id column is ``ids`` (cached, checked)."""
@@ -319,7 +308,7 @@ class BodyWriter(BodyReader):
         fetch, width, _ = _layout(_PV if positions else _F.VELOCITY)
         ids, floats = self._fetch(fetch, width)
         out = np.empty((len(self._bodies), width))
-        self._take(ids, floats, _NO_CENTRES, out)
+        self._take(ids, floats, out)
         return (out[:, 2:4], out[:, 0:2]) if positions else (out, None)
 
     def write_internal_velocities(self, velocities: FloatArray) -> None:
@@ -340,16 +329,6 @@ class BodyWriter(BodyReader):
         _put_rows(floats, 2, self._rows_of(ids), new)
         # the buffer holds exactly 2 floats per body in the walk's order, read just now
         buffer.set(self._space, _F.VELOCITY)
-
-    def write_internal_loads(self, loads: FloatArray) -> None:
-        """Set every chosen body's force and torque for the next step from ``loads`` (n, 3):
-        fx, fy, torque, internal units, in one batch write (every other body keeps its own)."""
-        if not self._bodies:
-            return
-        buffer = self._write_buffer
-        ids, floats = self._fetch(_LOADS_ID, 3, buffer)
-        _put_rows(floats, 3, self._rows_of(ids), loads)
-        buffer.set(self._space, _LOADS)
 
     def _verify_write(self) -> None:
         """Write marked velocities to the first and last body, check that exactly those
@@ -408,18 +387,11 @@ def _finite(values: np.ndarray) -> bool:
 
 @numba.njit(cache=True)
 def _take_rows(
-    floats: np.ndarray,
-    ids: np.ndarray,
-    rows: np.ndarray,
-    expected: np.ndarray,
-    centres: np.ndarray,
-    out: np.ndarray,
+    floats: np.ndarray, ids: np.ndarray, rows: np.ndarray, expected: np.ndarray, out: np.ndarray
 ) -> bool:
     """If ``rows`` of a fetch (flat ``floats``, ``out.shape[1]`` per body; id column ``ids``)
     hold the ids ``expected``, copy body ``rows[j]`` into ``out[j]`` and return True (else
-    False, nothing copied). With ``centres`` (one row per body; none: shape (0, 2)) a row's
-    first three values being x, y, angle, x, y move to the body-frame point ``centres[j]``:
-    x + R(angle)·c."""
+    False, nothing copied)."""
     if not _rows_hold(ids, rows, expected):
         return False
     width = out.shape[1]
@@ -427,11 +399,6 @@ def _take_rows(
         base = rows[j] * width
         for c in range(width):
             out[j, c] = floats[base + c]
-    if centres.shape[0] > 0:
-        for j in range(rows.size):
-            c, s = math.cos(out[j, 2]), math.sin(out[j, 2])
-            out[j, 0] += c * centres[j, 0] - s * centres[j, 1]
-            out[j, 1] += s * centres[j, 0] + c * centres[j, 1]
     return True
 
 

@@ -113,7 +113,7 @@ class ArbiterMeter:
         ``space.step``."""
         if self._machine_ids.size != len(self._rotor_driven):  # first step after unpickling
             self._start_caches()
-        self._ids0, self._table0, _ = self._space_reader.read_internal_space()
+        self._ids0, self._table0 = self._space_reader.read_internal_space()
 
     def after_step(self) -> float:
         """Add the step's contact dissipation: call immediately after ``space.step``, before
@@ -163,7 +163,7 @@ class ArbiterMeter:
         pair_ids, f = self.touching()
         if pair_ids.shape[0] == 0:
             return
-        ids, after, _ = self._space_reader.read_internal_space()
+        ids, after = self._space_reader.read_internal_space()
         where = self._rows_of(ids, pair_ids.ravel())  # rows in the sorted order
         rows = self._order[where].reshape(-1, 2)
         if np.array_equal(self._ids0, ids):
