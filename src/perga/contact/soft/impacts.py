@@ -223,11 +223,22 @@ class SoftImpactLog:
 @numba.njit(cache=True)
 def _keep(x, v, w, vertices, com, x_out, v_out, w_out, vertices_out, com_out):
     """Copy the granules' and polygons' state into the log's arrays of the same shapes."""
-    x_out[:] = x
-    v_out[:] = v
-    w_out[:] = w
-    vertices_out[:] = vertices
-    com_out[:] = com
+    _copy(x, x_out)
+    _copy(v, v_out)
+    _copy(w, w_out)
+    _copy(vertices, vertices_out)
+    _copy(com, com_out)
+
+
+@numba.njit(cache=True)
+def _copy(source, target):
+    """Copy the C-contiguous array ``source`` into ``target`` of its shape, as one flat loop
+    (numba's ``target[:] = source`` of a 2-D array indexes every element: slower,
+    docs/performance.md)."""
+    a = source.reshape(-1)
+    b = target.reshape(-1)
+    for k in range(a.size):
+        b[k] = a[k]
 
 
 @numba.njit(cache=True)
