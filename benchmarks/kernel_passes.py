@@ -46,7 +46,7 @@ from numba import njit
 from perga.case import load_case
 from perga.contact.soft import SoftGranules
 from perga.contact.soft import kernel as k
-from perga.contact.soft.laws import P_DAMPT, P_MU
+from perga.contact.soft.laws import P_DAMPT, P_MU, P_MUR
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import Candidates, polygon_contact
 from perga.contact.soft.polygon_set import PolygonArrays, TableArrays
@@ -97,13 +97,13 @@ STATES: dict[str, Callable[[], SoftGranules]] = {
 
 @njit(parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pairs(reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs, dt, reach, tangential,
-           acc, lost):  # fmt: skip
+           rolling, acc, lost):  # fmt: skip
     """The pair pass, reps times."""
     start, nbr, hist = nbrs
     for _ in range(reps):
         k._pair_forces_serial(
             x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-            acc, lost,
+            rolling, acc, lost,
         )  # fmt: skip
 
 
@@ -168,10 +168,11 @@ def runner(g: SoftGranules, part: str) -> tuple[Callable[[int], object], int, in
     if part == "pairs":
         lost = np.zeros(work[0].shape[0])
         tangential = bool(np.any(params[..., P_MU] != 0.0) or np.any(params[..., P_DAMPT] != 0.0))
+        rolling = bool(np.any(params[..., P_MUR] != 0.0))
         return (
             lambda reps: _pairs(
                 reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs[:3], dt, reach,
-                tangential, work[0], lost,
+                tangential, rolling, work[0], lost,
             ),
             steps, n, "ns a granule a step",
         )  # fmt: skip

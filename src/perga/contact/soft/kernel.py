@@ -251,7 +251,8 @@ class Settings(NamedTuple):
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def pair_force(
-    i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt, tangential
+    i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt, tangential,
+    rolling,
 ):  # fmt: skip
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
     k; updates hist[k].
@@ -262,7 +263,9 @@ def pair_force(
     is not ``touching``; ``_pair_range`` skips it unless it holds a spring, which is dropped
     here before the velocities are read. tangential: whether any pair of the table has friction
     or tangential damping; if not, the tangential law is skipped (its force is zero and its
-    spring stays empty). Rolling resistance is computed only for a pair with μ_r > 0."""
+    spring stays empty). rolling: whether any pair of the table has rolling resistance; if so,
+    it is computed for a pair with μ_r > 0 (a flag for the whole table lets the compiler drop the
+    per-pair test where nothing rolls, docs/performance.md)."""
     h = 0.5 * dt
     if d2 > far * far:
         xi = hist[k]
@@ -322,7 +325,7 @@ def pair_force(
         fy = fn * ny
         ti = 0.0
         tj = 0.0
-    if params[a, b, P_MUR] != 0.0:  # rolling resistance
+    if rolling and params[a, b, P_MUR] != 0.0:  # rolling resistance
         i_red = inertia[i] * inertia[j] / (inertia[i] + inertia[j])
         mr = rolling_torque(params, a, b, fn, wi - wj, r_eff, i_red, dt)
         if mr != 0.0:
@@ -335,7 +338,7 @@ def pair_force(
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _pair_range(
     lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    out,
+    rolling, out,
 ):  # fmt: skip
     """Pair forces of the list rows lo:hi (granules i) added into out (n, 3) = (fx, fy, torque),
     which holds zeros (the per-granule pass zeroes each row it reads); returns the energy those
@@ -363,7 +366,7 @@ def _pair_range(
                 continue  # no force and no spring to release (``pair_force``): nothing to add
             fx, fy, ti, tj, de = pair_force(
                 i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt,
-                tangential,
+                tangential, rolling,
             )  # fmt: skip
             out[i, 0] += fx
             out[i, 1] += fy
@@ -377,28 +380,28 @@ def _pair_range(
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(
-    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
-    lost,
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
+    rolling, acc, lost,
 ):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) added into acc (n_chunks, n, 3) = (fx, fy,
     torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
-    (docs/performance.md); reach (m) and tangential: as in ``pair_force``. One chunk runs in
-    ``_pair_forces_serial`` (no parallel region to open)."""
+    (docs/performance.md); reach (m), tangential and rolling: as in ``pair_force``. One chunk
+    runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
         lost[c] = _pair_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, acc[c],
+            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c],
         )  # fmt: skip
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pair_forces_serial(
-    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential, acc,
-    lost,
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
+    rolling, acc, lost,
 ):  # fmt: skip
     """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
     n = x.shape[0]
@@ -406,7 +409,7 @@ def _pair_forces_serial(
     for c in range(n_chunks):
         lost[c] = _pair_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, acc[c],
+            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c],
         )  # fmt: skip
 
 
@@ -504,6 +507,30 @@ def wall_gaps(x_ref, r, rows, wall_hist, gap):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
+def _add_pair_forces(acc, i, fx, fy, t):
+    """(fx, fy, t) plus granule i's pair force and torque from each chunk of acc (n_chunks, n,
+    3), in chunk order; zeroes those rows for the next pair pass. One chunk (one thread) is
+    added without the loop over chunks: the per-granule loop then compiles tighter
+    (docs/performance.md)."""
+    if acc.shape[0] == 1:
+        fx += acc[0, i, 0]
+        fy += acc[0, i, 1]
+        t += acc[0, i, 2]
+        acc[0, i, 0] = 0.0
+        acc[0, i, 1] = 0.0
+        acc[0, i, 2] = 0.0
+        return fx, fy, t
+    for q in range(acc.shape[0]):
+        fx += acc[q, i, 0]
+        fy += acc[q, i, 1]
+        t += acc[q, i, 2]
+        acc[q, i, 0] = 0.0
+        acc[q, i, 1] = 0.0
+        acc[q, i, 2] = 0.0
+    return fx, fy, t
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
 def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev):
     """Symplectic Euler for granule i (state arrays as in ``Granules``) from its force (fx, fy),
     N, and torque t, N·m, with the velocity factor damp = 1/(1 + drag·dt) and the speed cap
@@ -554,7 +581,6 @@ def _integrate_free(
     (``_motion_of``). A function of its own, not inlined: the small loop compiles tighter than
     inside the full path's function (docs/performance.md). Compiled as the passes are
     (parallel=True, error_model="numpy": the same arithmetic)."""
-    n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
@@ -562,16 +588,7 @@ def _integrate_free(
     for i in range(lo, hi):
         if flags[i]:
             continue
-        fx = 0.0
-        fy = 0.0
-        t = 0.0
-        for q in range(n_chunks):
-            fx += acc[q, i, 0]
-            fy += acc[q, i, 1]
-            t += acc[q, i, 2]
-            acc[q, i, 0] = 0.0
-            acc[q, i, 1] = 0.0
-            acc[q, i, 2] = 0.0
+        fx, fy, t = _add_pair_forces(acc, i, 0.0, 0.0, 0.0)
         if keep:
             f[i, 0] = fx
             f[i, 1] = fy
@@ -606,7 +623,6 @@ def _integrate_range(
     split gives the same floats."""
     dt, damp, v_cap, step, reach, near, gravity, keep = scalars
     wall_gap, flags, order = walls_near
-    n_chunks = acc.shape[0]
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
@@ -624,13 +640,7 @@ def _integrate_range(
                 i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
             )
             lost += de
-        for q in range(n_chunks):
-            fx += acc[q, i, 0]
-            fy += acc[q, i, 1]
-            t += acc[q, i, 2]
-            acc[q, i, 0] = 0.0
-            acc[q, i, 1] = 0.0
-            acc[q, i, 2] = 0.0
+        fx, fy, t = _add_pair_forces(acc, i, fx, fy, t)
         for e in range(cstart[i], cstart[i + 1]):
             was = phist[i, cpoly[e], HIST_ACTIVE] != 0.0
             now, px, py, ti, tk, de = polygon_contact(
@@ -877,6 +887,7 @@ def _advance(
     n_rebuilds = 0
     dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
     tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
+    rolling = np.any(params[:, :, P_MUR] != 0.0)
     wall_gap = np.empty(n)
     near = 0.0
     flags = np.empty(n, np.int8)
@@ -923,7 +934,7 @@ def _advance(
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, reach, tangential, work.acc, lost,
+                start, nbr, hist, dt, reach, tangential, rolling, work.acc, lost,
             )  # fmt: skip
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
