@@ -147,7 +147,9 @@ angle, angular velocity, torque, transform (6: a b c d tx ty)."""
 class _StructViews:
     """Numpy views of the C structs of pymunk objects ``items``, one per object, made (and
     checked, :meth:`_view`) at the first :meth:`views`; they live as long as this object holds
-    the objects. Pickled as the objects alone (the views are made again)."""
+    the objects. Pickled as the objects alone (the views are made again): take them from
+    :meth:`views` at each use, as a view kept elsewhere comes back from a checkpoint as a copy
+    that no longer follows the struct."""
 
     def __init__(self, items: list[Any]) -> None:
         self.items = items
