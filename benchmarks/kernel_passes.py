@@ -97,13 +97,13 @@ STATES: dict[str, Callable[[], SoftGranules]] = {
 
 @njit(parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pairs(reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs, dt, reach, tangential,
-           rolling, acc, lost):  # fmt: skip
+           rolling, acc, lost, flags):  # fmt: skip
     """The pair pass, reps times."""
     start, nbr, hist = nbrs
     for _ in range(reps):
         k._pair_forces_serial(
             x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-            rolling, acc, lost,
+            rolling, acc, lost, flags,
         )  # fmt: skip
 
 
@@ -172,7 +172,7 @@ def runner(g: SoftGranules, part: str) -> tuple[Callable[[int], object], int, in
         return (
             lambda reps: _pairs(
                 reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs[:3], dt, reach,
-                tangential, rolling, work[0], lost,
+                tangential, rolling, work[0], lost, np.zeros(n, np.int8),
             ),
             steps, n, "ns a granule a step",
         )  # fmt: skip

@@ -66,7 +66,7 @@ def test_plain_tuples_for_advance_follow_the_field_order():
     g = _scene()
     polys, table = g.polygons, g.polygon_table
     settings, state, props, bonds, params, walls, polygons, nbrs, work = g._bundles(
-        polys, table, 7, 0.5, 3.0
+        polys, table, 7, 0.5, 3.0, True
     )
     named = kernel.Settings(*settings)
     assert (named.n_steps, named.dt, named.skin, named.drag, named.v_cap, named.first_step) == (
@@ -78,6 +78,7 @@ def test_plain_tuples_for_advance_follow_the_field_order():
         g.steps,
     )
     assert named.gravity is g.gravity and named.pairs is True and named.rebuild is True
+    assert named.coast is True
     _same(kernel.Granules(*state), g)
     _same(kernel.GranuleProps(*props), g)
     _same(kernel.Bonds(*bonds), g)
@@ -106,13 +107,13 @@ def test_advance_takes_named_or_plain_bundles_alike():
         plain.step(20)
         polys, table = named.polygons, named.polygon_table
         settings, state, props, bonds, params, walls, _, nbrs, work = named._bundles(
-            polys, table, 20, 0.0, math.inf
+            polys, table, 20, 0.0, math.inf, True
         )
         polygons = kernel.Polygons(
             polys.arrays(), table.arrays(), named.polygon_hist, polys.loads(),
             kernel.CandidateList(*named._listed),
         )  # fmt: skip
-        named.start, named.nbr, named.hist, _, cstart, cpoly, _ = kernel.advance(
+        named.start, named.nbr, named.hist, _, cstart, cpoly, _, _ = kernel.advance(
             kernel.Settings(*settings), kernel.Granules(*state), kernel.GranuleProps(*props),
             kernel.Bonds(*bonds), params, kernel.Walls(*walls), polygons,
             kernel.NeighbourList(*nbrs), kernel.Work(*work),

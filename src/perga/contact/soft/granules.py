@@ -181,6 +181,13 @@ class SoftGranules:
         self.n_rebuilds = 0
         self.n_candidate_lists = 0
         """Polygon candidate lists built (``kernel.advance``), a diagnostic."""
+        self.coasting = True
+        """Let the granules out of every contact's reach take a call's steps at once
+        (``perga.contact.soft.coasting``: the same floats as step by step)."""
+        self.coasted = 0
+        """Granule steps taken coasting, a diagnostic."""
+        self._coast_wait = 0
+        self._coast_backoff = 1
         self._forget_candidates()
 
     @property
@@ -374,12 +381,14 @@ class SoftGranules:
         try:
             threaded = self.threads > 1 and self._acc.shape[0] > 1
             advance = kernel.advance_threaded if threaded else kernel.advance
-            self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists = advance(
-                *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap))
+            coast = self.coasting and self._coast_wait == 0 and n_steps > 1
+            self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists, coasted = advance(
+                *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap), coast)
             )
         finally:
             if switch:
                 numba.set_num_threads(previous)
+        self._pace_coasting(coast, coasted, n_steps)
         self._listed = (cstart, cpoly, *self._listed[2:])
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
@@ -387,8 +396,27 @@ class SoftGranules:
         self.steps += n_steps
         self.time += n_steps * self.dt
 
+    def _pace_coasting(self, tried: bool, coasted: int, n_steps: int) -> None:
+        """Count the coasted steps; where fewer than a tenth of a call's granule steps coasted,
+        do not look for coasting granules for the next 1, 2, 4, … 64 calls (looking costs
+        about a pass over the neighbour list; the results are the same either way)."""
+        self.coasted += coasted
+        if not tried:
+            self._coast_wait = max(self._coast_wait - 1, 0)
+        elif 10 * coasted < self.n * n_steps:
+            self._coast_wait = self._coast_backoff
+            self._coast_backoff = min(2 * self._coast_backoff, 64)
+        else:
+            self._coast_backoff = 1
+
     def _bundles(
-        self, p: PolygonSet, t: ContactTable, n_steps: int, drag: float, v_cap: float
+        self,
+        p: PolygonSet,
+        t: ContactTable,
+        n_steps: int,
+        drag: float,
+        v_cap: float,
+        coast: bool = False,
     ) -> tuple:
         """The arguments of ``kernel.advance``: its bundles as plain tuples in their fields'
         order (``kernel.advance`` doc: they cost less to pass and to build than named ones;
@@ -412,6 +440,7 @@ class SoftGranules:
                 self.pairs,
                 self._rebuild,
                 self.steps,
+                coast,
             ),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),

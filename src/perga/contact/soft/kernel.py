@@ -37,8 +37,8 @@ list's build positions (``wall_gaps``, at a call's first step and after every re
 most its largest displacement since plus the reach (``pair_force``).
 
 Integrator: symplectic Euler with velocity kicks (Hairer, Lubich & Wanner, Geometric Numerical
-Integration, 2006, ch. I): forces from (x, v, w) at step start, then v += (f/m + g) dt,
-w += tq/I dt, x += v dt with the new v. Optional global drag (implicit: v ← v/(1 + drag·dt))
+Integration, 2006, ch. I; ``perga.contact.soft.stepping``): forces from (x, v, w) at step
+start, then v += (f/m + g) dt, w += tq/I dt, x += v dt with the new v. Optional global drag (implicit: v ← v/(1 + drag·dt))
 and a speed cap v_cap serve ``SoftGranules.relax`` only; normal runs have drag = 0,
 v_cap = inf.
 
@@ -56,7 +56,10 @@ or are held (``mark_special``: at a call's first step, after every rebuild, and 
 reach ``near`` has grown ``SPECIAL_MARGIN`` skins past its value then) take the full path;
 every other granule only sums its pair forces and moves, in a loop compiled on its own
 (``_integrate_free``). A granule's step touches only its own state, so the split changes no
-float.
+float. The granules that no contact can reach for the rest of the call coast
+(``perga.contact.soft.coasting``): they take those steps at once after the flagging, the
+passes skip them, and they are rewound to the step reached wherever that may no longer hold;
+the floats are those of steps one by one.
 
 Dissipation: every contact reports the energy its law dissipated over the step
 (``laws.contact_force``; rolling resistance |M ω_rel| dt; a tangential spring dropped at a
@@ -64,11 +67,11 @@ contact's end ½ k_t ξ²); ``Work.dissipated`` accumulates [granule pairs, wall
 
 Parallel loops: the bundles are unpacked into arrays before every ``prange`` loop (and
 ``pair_forces``, the hottest, takes arrays), and the per-contact functions called inside it
-(``pair_force``, ``wall_force``, ``_kick_drift_one``, ``polygon_forces.polygon_contact``) take
-the granule arrays themselves. Numba (0.68) drops writes made through a named tuple's field
-inside a parallel loop (numba issues #5872, #7135), and reading the granule arrays through a
-bundle there changed the compiled fast-math arithmetic in the last bit; polygon and table
-bundles, only read there, are passed whole.
+(``pair_force``, ``wall_force``, ``stepping.kick_drift_one``,
+``polygon_forces.polygon_contact``) take the granule arrays themselves. Numba (0.68) drops
+writes made through a named tuple's field inside a parallel loop (numba issues #5872, #7135),
+and reading the granule arrays through a bundle there changed the compiled fast-math
+arithmetic in the last bit; polygon and table bundles, only read there, are passed whole.
 
 Threads: pair forces are split in ``n_chunks`` contiguous ranges of i, each accumulating into
 its own slice of ``acc``, summed per granule afterwards in chunk order, so each pair is computed
@@ -92,6 +95,7 @@ import numpy as np
 from numba import njit, prange
 from numba.core.errors import NumbaPerformanceWarning
 
+from perga.contact.soft.coasting import COAST, coast, rewind, speed_bound
 from perga.contact.soft.laws import (
     P_CLAMP,
     P_DAMP,
@@ -119,6 +123,7 @@ from perga.contact.soft.polygon_forces import (
     pose,
 )
 from perga.contact.soft.polygon_set import HIST_ACTIVE, PolygonArrays, PolygonLoads, TableArrays
+from perga.contact.soft.stepping import add_pair_forces, kick_drift_one, motion_of
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
@@ -236,7 +241,8 @@ class Work(NamedTuple):
 class Settings(NamedTuple):
     """The call's scalars: n_steps; dt, s; gravity (2,), m/s²; skin, m; drag, 1/s; v_cap, m/s;
     pairs: granule-granule contacts on; rebuild: rebuild the neighbour list first; first_step:
-    the number of steps taken before the call."""
+    the number of steps taken before the call; coast: let the granules out of every contact's
+    reach take their steps at once (``perga.contact.soft.coasting``)."""
 
     n_steps: int
     dt: float
@@ -247,6 +253,7 @@ class Settings(NamedTuple):
     pairs: bool
     rebuild: bool
     first_step: int
+    coast: bool
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -338,7 +345,7 @@ def pair_force(
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _pair_range(
     lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, out,
+    rolling, out, flags,
 ):  # fmt: skip
     """Pair forces of the list rows lo:hi (granules i) added into out (n, 3) = (fx, fy, torque),
     which holds zeros (the per-granule pass zeroes each row it reads); returns the energy those
@@ -347,9 +354,12 @@ def _pair_range(
     ``pair_force``, whose zeros would otherwise be added. Numba wraps a negative index around unless
     the compiler can prove it non-negative, so i starts at max(lo, 0) and an entry j < 0 (there is
     none) is skipped: the wraparound is then dropped from every index below
-    (docs/performance.md)."""
+    (docs/performance.md). The row of a granule flagged ``coasting.COAST`` in flags (n,) is
+    skipped: none of its pairs can come within reach (``perga.contact.soft.coasting``)."""
     dissipated = 0.0
     for i in range(max(lo, 0), hi):
+        if flags[i] == COAST:
+            continue
         xi = x[i, 0]
         yi = x[i, 1]
         ri = r[i]
@@ -381,27 +391,28 @@ def _pair_range(
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, acc, lost,
+    rolling, acc, lost, flags,
 ):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) added into acc (n_chunks, n, 3) = (fx, fy,
     torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
-    (docs/performance.md); reach (m), tangential and rolling: as in ``pair_force``. One chunk
-    runs in ``_pair_forces_serial`` (no parallel region to open)."""
+    (docs/performance.md); reach (m), tangential and rolling: as in ``pair_force``; flags (n,)
+    int8: the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
+    chunk runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
         lost[c] = _pair_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c],
+            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c], flags,
         )  # fmt: skip
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pair_forces_serial(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, acc, lost,
+    rolling, acc, lost, flags,
 ):  # fmt: skip
     """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
     n = x.shape[0]
@@ -409,7 +420,7 @@ def _pair_forces_serial(
     for c in range(n_chunks):
         lost[c] = _pair_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c],
+            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c], flags,
         )  # fmt: skip
 
 
@@ -506,55 +517,6 @@ def wall_gaps(x_ref, r, rows, wall_hist, gap):
         gap[i] = g - 1e-9 * r[i]
 
 
-@njit(cache=True, inline="always", fastmath=FASTMATH)
-def _add_pair_forces(acc, i, fx, fy, t):
-    """(fx, fy, t) plus granule i's pair force and torque from each chunk of acc (n_chunks, n,
-    3), in chunk order; zeroes those rows for the next pair pass. One chunk (one thread) is
-    added without the loop over chunks: the per-granule loop then compiles tighter
-    (docs/performance.md)."""
-    if acc.shape[0] == 1:
-        fx += acc[0, i, 0]
-        fy += acc[0, i, 1]
-        t += acc[0, i, 2]
-        acc[0, i, 0] = 0.0
-        acc[0, i, 1] = 0.0
-        acc[0, i, 2] = 0.0
-        return fx, fy, t
-    for q in range(acc.shape[0]):
-        fx += acc[q, i, 0]
-        fy += acc[q, i, 1]
-        t += acc[q, i, 2]
-        acc[q, i, 0] = 0.0
-        acc[q, i, 1] = 0.0
-        acc[q, i, 2] = 0.0
-    return fx, fy, t
-
-
-@njit(cache=True, inline="always", fastmath=FASTMATH)
-def _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev):
-    """Symplectic Euler for granule i (state arrays as in ``Granules``) from its force (fx, fy),
-    N, and torque t, N·m, with the velocity factor damp = 1/(1 + drag·dt) and the speed cap
-    v_cap, m/s; records a_prev[i]."""
-    ax = fx / m[i] + gravity[0]
-    ay = fy / m[i] + gravity[1]
-    alpha = t / inertia[i]
-    vx = (v[i, 0] + dt * ax) * damp
-    vy = (v[i, 1] + dt * ay) * damp
-    s2 = vx * vx + vy * vy
-    if s2 > v_cap * v_cap:
-        scale = v_cap / math.sqrt(s2)
-        vx *= scale
-        vy *= scale
-    v[i, 0] = vx
-    v[i, 1] = vy
-    w[i] = (w[i] + dt * alpha) * damp
-    a_prev[i, 0] = ax
-    a_prev[i, 1] = ay
-    a_prev[i, 2] = alpha
-    x[i, 0] += dt * vx
-    x[i, 1] += dt * vy
-
-
 @njit(cache=True, fastmath=FASTMATH)
 def mark_special(wall_gap, covered, cstart, held, flags, order):
     """Flag the granules the per-granule pass must take on its full path (``_integrate_range``):
@@ -577,10 +539,10 @@ def _integrate_free(
 ):  # fmt: skip
     """The free path of ``_integrate_range``: every granule i of lo:hi not flagged sums its pair
     forces (acc, whose rows it zeroes for the next pair pass; into f and tq if keep) and moves
-    (``_kick_drift_one``); returns their (max displacement², max speed², max extrapolated speed²)
-    (``_motion_of``). A function of its own, not inlined: the small loop compiles tighter than
-    inside the full path's function (docs/performance.md). Compiled as the passes are
-    (parallel=True, error_model="numpy": the same arithmetic)."""
+    (``stepping.kick_drift_one``); returns their (max displacement², max speed², max
+    extrapolated speed²) (``stepping.motion_of``). A function of its own, not inlined: the
+    small loop compiles tighter than inside the full path's function (docs/performance.md).
+    Compiled as the passes are (parallel=True, error_model="numpy": the same arithmetic)."""
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
@@ -588,13 +550,13 @@ def _integrate_free(
     for i in range(lo, hi):
         if flags[i]:
             continue
-        fx, fy, t = _add_pair_forces(acc, i, 0.0, 0.0, 0.0)
+        fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
         if keep:
             f[i, 0] = fx
             f[i, 1] = fy
             tq[i] = t
-        _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+        d2, s2, u2 = motion_of(i, x, v, a_prev, x_ref, h)
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
@@ -640,7 +602,7 @@ def _integrate_range(
                 i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
             )
             lost += de
-        fx, fy, t = _add_pair_forces(acc, i, fx, fy, t)
+        fx, fy, t = add_pair_forces(acc, i, fx, fy, t)
         for e in range(cstart[i], cstart[i + 1]):
             was = phist[i, cpoly[e], HIST_ACTIVE] != 0.0
             now, px, py, ti, tk, de = polygon_contact(
@@ -672,8 +634,8 @@ def _integrate_range(
             released_step[i] = step
             release_force[i] = load
             releases += 1
-        _kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+        d2, s2, u2 = motion_of(i, x, v, a_prev, x_ref, h)
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
@@ -776,22 +738,11 @@ def _motion(x, v, a_prev, x_ref, dt):
     smax = 0.0
     umax = 0.0
     for i in range(x.shape[0]):
-        d2, s2, u2 = _motion_of(i, x, v, a_prev, x_ref, h)
+        d2, s2, u2 = motion_of(i, x, v, a_prev, x_ref, h)
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
     return dmax, smax, umax
-
-
-@njit(cache=True, inline="always")
-def _motion_of(i, x, v, a_prev, x_ref, h):
-    """Granule i's |x − x_ref|² (m²), |v|² and |v + h a_prev|² (m²/s²), h = dt/2 (inlined: the
-    caller's compile flags apply)."""
-    ex = x[i, 0] - x_ref[i, 0]
-    ey = x[i, 1] - x_ref[i, 1]
-    ux = v[i, 0] + h * a_prev[i, 0]
-    uy = v[i, 1] + h * a_prev[i, 1]
-    return ex * ex + ey * ey, v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1], ux * ux + uy * uy
 
 
 @njit(cache=True)
@@ -897,8 +848,21 @@ def _advance(
     need = settings.rebuild or (pairs and start.shape[0] != n + 1)
     need = need or 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     fresh = False
+    gravity = settings.gravity
+    damp = 1.0 / (1.0 + settings.drag * dt)
+    maxima = np.empty((n_steps, 3))
+    coasting = (np.empty(0, np.int64), np.empty((5, 0)), np.empty((3, 0)))
+    first_coast = 0
+    speed = 0.0
+    past = False
+    coasted = 0
     for step in range(n_steps):
         reach = dt * math.sqrt(umax)
+        if coasting[0].shape[0] > 0 and (need or past or math.sqrt(dmax) + reach > covered):
+            rewind(granules, flags, coasting, (step - first_coast, dt, damp, settings.v_cap))
+            coasted -= coasting[0].shape[0] * (n_steps - step)
+            coasting = (coasting[0][:0], np.empty((5, 0)), np.empty((3, 0)))
+            past = True
         rebuilt = need
         if need:
             if pairs:
@@ -931,10 +895,21 @@ def _advance(
         if rebuilt or step == 0 or near > covered:  # wall gaps or candidates new, near grown
             covered = near + SPECIAL_MARGIN * skin
             n_special = mark_special(wall_gap, covered, cand.start, bonds.held, flags, order)
+            past = True
+        if settings.coast and past and coasting[0].shape[0] == 0 and n_steps - step > 1:
+            speed = speed_bound(smax, umax, gravity, n_steps - step, dt)
+            coasting = coast(
+                granules, props, work.acc, work.f, work.tq, x_ref,
+                (start, nbr, hist) if pairs else (start[:0], nbr, hist), flags,
+                (n_steps - step, dt, gravity, damp, settings.v_cap, speed), maxima,
+            )  # fmt: skip
+            first_coast = step
+            coasted += coasting[0].shape[0] * (n_steps - step)
+        past = False
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, reach, tangential, rolling, work.acc, lost,
+                start, nbr, hist, dt, reach, tangential, rolling, work.acc, lost, flags,
             )  # fmt: skip
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
@@ -954,13 +929,18 @@ def _advance(
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
             counts[COUNT_CONTACT_CHANGES] += int(chunk[c, 4])
             counts[COUNT_RELEASES] += int(chunk[c, 5])
+        if coasting[0].shape[0] > 0:
+            past = max(smax, umax) > speed * speed
+            dmax = max(dmax, maxima[step - first_coast, 0])
+            smax = max(smax, maxima[step - first_coast, 1])
+            umax = max(umax, maxima[step - first_coast, 2])
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     if n_poly > 0 and n_steps > 0:
         pose(origin, poly, n_steps * dt)
         force /= n_steps
         torque /= n_steps
         moment /= n_steps
-    return start, nbr, hist, n_rebuilds, cstart, cpoly, n_lists
+    return start, nbr, hist, n_rebuilds, cstart, cpoly, n_lists, coasted
 
 
 def new_accumulator(n_chunks: int, n: int) -> np.ndarray:

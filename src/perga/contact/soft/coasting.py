@@ -1,0 +1,168 @@
+"""Coasting granules: the granules no contact can reach for the rest of a kernel call take
+all of its steps at once, with the same floats as step by step (issue 14, item 5;
+docs/performance.md).
+
+A granule coasts from step k0 of a call for the S steps left when
+
+* ``kernel.mark_special`` did not flag it (no wall within reach, no polygon candidate, no
+  bond), and
+* every pair of the neighbour list it is in holds no tangential spring and is farther apart
+  than r_i + r_j + (2S + 1)·dt·V, V a speed bound (``speed_bound``): twice the largest speed
+  and extrapolated speed |v + ½ dt a_prev| of any granule at k0, plus |g|·(S + 1)·dt.
+
+While every granule that does not coast keeps |v| and |v + ½ dt a_prev| within V (the kernel
+checks it after every step), a coasting granule moves at most S·dt·V and so does each of its
+partners; the pair pass reads it at most that far ahead of where it is, and a pair's reach
+(``kernel.pair_force``) is at most dt·V. So no pair of it comes within r_i + r_j + reach: the
+pair pass adds nothing for it, as step by step, and its only force is gravity. Its steps are the
+free path's arithmetic with zero pair forces (``stepping``), taken at once (``coast``): its
+accelerations once, its state in registers, its displacement, speed and extrapolated speed after
+each step recorded, so that the call's rebuild test and reach see the maxima they see step by
+step.
+
+The kernel rewinds the coasting granules to the step reached (``rewind``: their state at k0
+saved, those steps taken again) wherever the premise may fail: before a rebuild of the
+neighbour list, before the granules are flagged anew, and after a step in which a granule that
+does not coast went faster than V; the rest of the call then decides anew.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from perga.contact.soft.stepping import add_pair_forces, kick_drift, motion
+from perga.geometry.disc_polygon import FASTMATH
+
+COAST = 2
+"""The value of a coasting granule in the flags of ``kernel.mark_special`` (0 free, 1 flagged)."""
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def speed_bound(smax, umax, gravity, steps, dt):
+    """V, m/s (module doc), from the largest speed² smax and extrapolated speed² umax of the
+    granules (m²/s²), gravity (2,) (m/s²) and the steps left, each of dt (s)."""
+    g = math.sqrt(gravity[0] * gravity[0] + gravity[1] * gravity[1])
+    return 2.0 * math.sqrt(max(smax, umax)) + g * (steps + 1) * dt
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
+    """Take the S steps left at once for every granule that may coast (module doc): marks it
+    COAST in flags (n,) int8, writes its contact force and torque (zero) to f and tq, and the
+    largest |x − x_ref|², |v|² and |v + ½ dt a_prev|² of the coasting granules after each step
+    to maxima[:S] (S, 3); returns, for ``rewind``, their indices (count,) int64, their x, y,
+    vx, vy, w before (5, count) and their accelerations a_x, a_y, α (3, count).
+
+    granules, props: as in ``kernel.Granules`` and ``kernel.GranuleProps``; acc, f, tq as in
+    ``kernel.Work``; nbrs = (start, nbr, hist) the half list (another length of start: no
+    pairs); scalars = (S, dt, gravity, damp, v_cap, V). A pair holding a tangential spring
+    stops both from coasting whatever its distance (the pair pass must release the spring)."""
+    x, v, w, a_prev = granules
+    r = props.r
+    start, nbr, hist = nbrs
+    steps, dt, gravity, damp, v_cap, speed = scalars
+    n = x.shape[0]
+    near = flags != 0
+    span = (2 * steps + 1) * dt * speed * (1.0 + 1e-9)
+    for i in range(n if start.shape[0] == n + 1 else 0):  # no list: no pairs
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            dx = x[i, 0] - x[j, 0]
+            dy = x[i, 1] - x[j, 1]
+            keep = r[i] + r[j] + span
+            if hist[k] != 0.0 or dx * dx + dy * dy <= keep * keep:
+                near[i] = True
+                near[j] = True
+    index = np.flatnonzero(~near)
+    count = index.shape[0]
+    state = np.empty((10, count))  # x, y, vx, vy, w, a_x, a_y, α, and x_ref's x, y
+    for c in range(count):
+        i = index[c]
+        flags[i] = COAST
+        fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
+        f[i, 0] = fx
+        f[i, 1] = fy
+        tq[i] = t
+        ax = fx + gravity[0]  # = fx/m + g: fx = ±0 and m > 0 (``stepping.accelerations``)
+        ay = fy + gravity[1]
+        alpha = t  # = t/I
+        state[0, c] = x[i, 0]
+        state[1, c] = x[i, 1]
+        state[2, c] = v[i, 0]
+        state[3, c] = v[i, 1]
+        state[4, c] = w[i]
+        state[5, c] = ax
+        state[6, c] = ay
+        state[7, c] = alpha
+        state[8, c] = x_ref[i, 0]
+        state[9, c] = x_ref[i, 1]
+    saved = state[:5].copy()
+    if math.isinf(v_cap):  # a literal infinite cap: the compiler drops the cap's test
+        _steps(state, steps, dt, damp, math.inf, maxima)
+    else:
+        _steps(state, steps, dt, damp, v_cap, maxima)
+    for c in range(count):
+        i = index[c]
+        x[i, 0] = state[0, c]
+        x[i, 1] = state[1, c]
+        v[i, 0] = state[2, c]
+        v[i, 1] = state[3, c]
+        w[i] = state[4, c]
+        a_prev[i, 0] = state[5, c]
+        a_prev[i, 1] = state[6, c]
+        a_prev[i, 2] = state[7, c]
+    return index, saved, state[5:8].copy()
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _steps(state, steps, dt, damp, v_cap, maxima):
+    """``steps`` steps of the granules of state (``coast``), each over all of them (a loop the
+    compiler vectorises); the largest |x − x_ref|², |v|², |v + ½ dt a|² after each step to
+    maxima. None is negative, so the largest is found on their bits as integers (the same
+    order; a loop over floats the compiler would not vectorise)."""
+    count = state.shape[1]
+    px, py, vx, vy, wi = state[0], state[1], state[2], state[3], state[4]
+    ax, ay, alpha, rx, ry = state[5], state[6], state[7], state[8], state[9]
+    moved = np.empty((3, count))
+    largest = maxima.view(np.int64)
+    bits = moved.view(np.int64)
+    h = 0.5 * dt
+    for s in range(steps):
+        for c in range(count):
+            px[c], py[c], vx[c], vy[c], wi[c] = kick_drift(
+                px[c], py[c], vx[c], vy[c], wi[c], ax[c], ay[c], alpha[c], dt, damp, v_cap
+            )
+            moved[0, c], moved[1, c], moved[2, c] = motion(
+                px[c], py[c], vx[c], vy[c], ax[c], ay[c], rx[c], ry[c], h
+            )
+        for q in range(3):
+            top = 0
+            for c in range(count):
+                top = max(top, bits[q, c])
+            largest[s, q] = top
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def rewind(granules, flags, coasting, scalars):
+    """Put the coasting granules (index, saved x, y, vx, vy, w and their accelerations) =
+    coasting (``coast``) where their first ``steps`` (≥ 1) steps take them and clear their
+    flags; scalars = (steps, dt, damp, v_cap)."""
+    x, v, w, a_prev = granules
+    index, saved, acc = coasting
+    steps, dt, damp, v_cap = scalars
+    for c in range(index.shape[0]):
+        i = index[c]
+        flags[i] = 0
+        px, py, vx, vy, wi = saved[0, c], saved[1, c], saved[2, c], saved[3, c], saved[4, c]
+        ax, ay, alpha = acc[0, c], acc[1, c], acc[2, c]
+        for _ in range(steps):
+            px, py, vx, vy, wi = kick_drift(px, py, vx, vy, wi, ax, ay, alpha, dt, damp, v_cap)
+        x[i, 0] = px
+        x[i, 1] = py
+        v[i, 0] = vx
+        v[i, 1] = vy
+        w[i] = wi
+        a_prev[i, 0] = ax
+        a_prev[i, 1] = ay
+        a_prev[i, 2] = alpha

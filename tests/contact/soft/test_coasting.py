@@ -1,0 +1,132 @@
+"""Coasting granules (``perga.contact.soft.coasting``) take a call's steps at once with the
+same floats as step by step: every comparison here is bit for bit (``np.array_equal``), the
+only tolerance an exact method has. Each scene is stepped twice from one state, with
+``SoftGranules.coasting`` on and off, and each checks that granules did coast."""
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from perga.case import load_case
+from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
+from perga.engine import Simulation
+from perga.model.from_case import scene_spec
+
+from .helpers import MASS, RADIUS, chamber_gas
+
+ROOT = Path(__file__).resolve().parents[3]
+STATE = ("x", "v", "w", "a_prev", "f", "tq", "hist", "wall_hist", "dissipated", "counts")
+
+
+def _both(g: SoftGranules, calls: int, steps: int, **kwargs) -> tuple[SoftGranules, SoftGranules]:
+    """g stepped ``calls`` calls of ``steps`` steps with coasting on, and a copy with it off."""
+    on, off = copy.deepcopy(g), copy.deepcopy(g)
+    off.coasting = False
+    for _ in range(calls):
+        on.step(steps, **kwargs)
+        off.step(steps, **kwargs)
+    return on, off
+
+
+def _assert_same(on: SoftGranules, off: SoftGranules) -> None:
+    for name in STATE:
+        assert np.array_equal(getattr(on, name), getattr(off, name)), name
+    assert on.n_rebuilds == off.n_rebuilds
+    assert off.coasted == 0
+
+
+@pytest.mark.parametrize("chunks", [1, 2])
+@pytest.mark.parametrize("gravity", [(0.0, 0.0), (0.0, -9.81)])
+def test_a_gas_coasts_to_the_floats_of_steps_one_by_one(gravity, chunks) -> None:
+    """60 granules at about 7 m/s in a chamber, with friction, a wall and gravity or not: 40
+    calls of 12 steps rebuild the neighbour list more often than once a call (so also within
+    calls) and collide granules with each other and the wall, so the coasting granules are
+    rewound (before rebuilds, new flags and after a granule outran the speed bound). Two
+    chunks: the pair forces summed per chunk."""
+    row = contact_parameters("linear", 0.6, k_n=1e4, friction=0.4)
+    g = chamber_gas(60, 3, row, speed=5.0, chunks=chunks)
+    g.gravity[:] = gravity
+    on, off = _both(g, 40, 12)
+    _assert_same(on, off)
+    assert on.n_rebuilds > 40
+    assert on.coasted > 0.3 * on.n * on.steps
+    assert on.dissipated[0] > 0.0 and on.dissipated[1] > 0.0  # pairs and wall contacts
+
+
+def test_a_pushed_row_rewinds_when_a_granule_outruns_the_bound() -> None:
+    """Granules at rest in a row, 0.05 mm apart, the first two overlapping: at rest the speed
+    bound is 0, so every other granule coasts, and the pushed pair outruns the bound in the
+    first step. Each rewind must put the coasting granules back before the pair pass reaches
+    them: the push travels down the row within a few calls."""
+    n = 12
+    r = np.full(n, RADIUS)
+    x = np.zeros((n, 2))
+    x[:, 0] = np.arange(n) * (2 * RADIUS + 5e-5)
+    x[0, 0] = x[1, 0] - 1.8 * RADIUS
+    row = contact_parameters("linear", 0.8, k_n=1e4)
+    g = SoftGranules(x, r, np.full(n, MASS), uniform_table(row))
+    on, off = _both(g, 30, 20)
+    _assert_same(on, off)
+    assert np.count_nonzero(np.hypot(*on.v.T) > 0.0) == n  # the push reached the row's end
+    assert on.coasted > 0
+
+
+def test_a_granule_falling_onto_a_held_one_meets_it_within_a_call() -> None:
+    """Two granules at rest, the lower held by a bond, the upper 10 µm above it under a gravity
+    that makes it fall 50 µm in a call of 10 steps: at rest the speed bound is gravity's part
+    alone, which must keep the upper one from coasting through the contact."""
+    row = contact_parameters("linear", 0.8, k_n=1e4)
+    gap = 1e-5
+    g = SoftGranules(
+        [[0.0, 0.0], [0.0, 2 * RADIUS + gap]], [RADIUS] * 2, [MASS] * 2, uniform_table(row),
+        held=[True, False], bond_force=[np.inf, 0.0],
+    )  # fmt: skip
+    g.gravity[:] = (0.0, -2 * 5 * gap / (10 * g.dt) ** 2)  # ½ g (10 dt)² = 5 gaps
+    on, off = _both(g, 3, 10)
+    _assert_same(on, off)
+    assert off.dissipated[0] > 0.0  # they met
+
+
+def test_relax_coasts_to_the_same_floats() -> None:
+    """``relax``: a finite speed cap and a drag in every step."""
+    row = contact_parameters("linear", 0.6, k_n=1e4, friction=0.4)
+    g = chamber_gas(40, 8, row, overlapping=True)
+    on, off = copy.deepcopy(g), copy.deepcopy(g)
+    off.coasting = False
+    assert on.relax(block=20) == off.relax(block=20)
+    _assert_same(on, off)
+    assert on.coasted > 0
+
+
+def test_the_soft_separator_coasts_to_the_same_frames() -> None:
+    """The bundled soft separator (300 granules, hammers as polygons, the chamber wall, floor
+    friction and hinge friction), 600 machine steps from rest."""
+    case = load_case(ROOT / "cases/soft-separator.toml", ["solver.threads=1"])
+    on, off = (Simulation(scene_spec(case), track_energy=True) for _ in range(2))
+    off.contacts.granules.coasting = False
+    for _ in range(600):
+        on.step()
+        off.step()
+    for name in ("x", "v", "w", "f", "polygon_hist"):
+        assert np.array_equal(
+            getattr(on.contacts.granules, name), getattr(off.contacts.granules, name)
+        ), name
+    a, b = on.frame().machine, off.frame().machine
+    assert np.array_equal(a.swing_angles, b.swing_angles)
+    assert len(on.impacts) == len(off.impacts)
+    granules = on.contacts.granules
+    assert granules.coasted > 0.3 * granules.n * granules.steps
+
+
+@pytest.mark.parametrize(("share", "waits"), [(0.1, 0), (0.0999, 1)], ids=["a tenth", "less"])
+def test_looking_for_coasting_granules_pauses_where_few_coast(share, waits) -> None:
+    """A call in which fewer than a tenth of the granule steps coasted pauses the search for
+    1, then 2, 4, … calls; a tenth or more keeps it on."""
+    row = contact_parameters("linear", 0.6, k_n=1e4)
+    g = chamber_gas(10, 1, row)
+    g._pace_coasting(True, round(share * 10 * 10_000), 10_000)
+    assert g._coast_wait == waits
+    g._pace_coasting(True, 0, 10_000)
+    assert g._coast_wait == (2 if waits else 1)
