@@ -120,7 +120,7 @@ def _granules(reps, granules, props, bonds, params, walls, poly, table, phist, c
     for _ in range(reps):
         k._integrate_serial(
             granules, props, bonds, params, walls, poly, table, phist, rho, cand, settings, work,
-            x_ref, chunk, 0, reach, (wall_gap, flags, order[:count]), reach,
+            x_ref, chunk, 0, reach, (wall_gap, flags, order[:count], order[:0]), reach,
         )  # fmt: skip
 
 

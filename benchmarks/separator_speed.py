@@ -4,14 +4,16 @@ step spent outside the soft kernel, optionally side by side with another commit.
 Each measurement is one `perga run` done in a fresh subprocess (``--one``) through
 ``perga.runner.run_case``, with ``SoftGranules.step`` (the compiled kernel call) and
 ``Simulation.step`` wrapped by timers: wall time of the run (``summary.json``, build and output
-included), time in ``Simulation.step``, time in the kernel. Variants (this tree, and with
-``--against REF`` the commit REF checked out in a temporary worktree) are interleaved run by
-run; figures are medians over ``--repeats``, ratios are medians of run-by-run paired ratios.
+included), time in ``Simulation.step``, time in the kernel, and the share of the granule steps
+that coasted (``perga.contact.soft.coasting``; 0 for a tree without it). Variants (this tree,
+and with ``--against REF`` the commit REF checked out in a temporary worktree) are interleaved
+run by run; figures are medians over ``--repeats``, ratios are medians of run-by-run paired ratios.
 Every variant first runs each case once untimed (numba's cache).
 
     python benchmarks/separator_speed.py                       # the three cases, this tree
     python benchmarks/separator_speed.py --against d605bbb     # side by side with a commit
     python benchmarks/separator_speed.py --cases soft-separator --repeats 5
+    python benchmarks/separator_speed.py --cases soft-separator-1000 --seconds 0.05
 """
 
 from __future__ import annotations
@@ -55,7 +57,17 @@ def one(case: str, duration: float, out: str) -> None:
         return wrapper
 
     Simulation.step = timed("step", Simulation.step)  # type: ignore[method-assign]
-    SoftGranules.step = timed("kernel", SoftGranules.step)  # type: ignore[method-assign]
+    kernel_step = timed("kernel", SoftGranules.step)
+
+    def counted(self, n_steps=1, **kwargs):
+        """The kernel call, timed, with its granule steps and those that coasted counted."""
+        before = getattr(self, "coasted", 0)
+        kernel_step(self, n_steps, **kwargs)
+        timers["coasted"] += getattr(self, "coasted", 0) - before
+        timers["granule_steps"] += self.n * n_steps
+
+    timers |= {"coasted": 0, "granule_steps": 0}
+    SoftGranules.step = counted  # type: ignore[method-assign]
     path = Path(case)
     loaded = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
     prepare_directory(Path(out), overwrite=True)
@@ -68,6 +80,7 @@ def one(case: str, duration: float, out: str) -> None:
                 "simulated": summary.simulated_time,
                 "step": timers["step"],
                 "kernel": timers["kernel"],
+                "coasted": timers["coasted"] / max(timers["granule_steps"], 1),
                 "threads": summary.threads,
             }
         )
@@ -110,6 +123,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=sorted(CASES), default=list(CASES))
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--seconds", type=float, help="simulated seconds of every case")
     parser.add_argument("--against", help="a git ref to measure side by side")
     parser.add_argument("--one", nargs=3, metavar=("CASE", "S", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -122,6 +136,7 @@ def main() -> None:
     print(f"load average at start: {os.getloadavg()[0]:.2f}; cores: {os.cpu_count()}")
     for name in args.cases:
         case, duration = CASES[name]
+        duration = args.seconds or duration
         for source in variants.values():
             measure(source, case, min(duration, 0.002))  # warm numba's cache
         runs: dict[str, list[dict[str, float]]] = {v: [] for v in variants}
@@ -129,15 +144,19 @@ def main() -> None:
             for variant, source in variants.items():
                 runs[variant].append(measure(source, case, duration))
         print(f"\n{name}: {duration} s simulated, {args.repeats} runs per variant, 1 thread")
-        header = ("variant", "wall s/s", "step s/s", "kernel s/s", "outside kernel")
-        print("{:>12} {:>9} {:>9} {:>10} {:>15}".format(*header))
+        header = ("variant", "wall s/s", "step s/s", "kernel s/s", "outside kernel", "coasted")
+        print("{:>12} {:>9} {:>9} {:>10} {:>15} {:>8}".format(*header))
         for variant, results in runs.items():
             wall = statistics.median(r["wall"] / r["simulated"] for r in results)
             step = statistics.median(r["step"] / r["simulated"] for r in results)
             kernel = statistics.median(r["kernel"] / r["simulated"] for r in results)
             outside = statistics.median(1 - r["kernel"] / r["step"] for r in results)
             share = f"{100 * outside:.0f} %" if kernel > 0 else "-"
-            print(f"{variant:>12} {wall:9.1f} {step:9.1f} {kernel:10.1f} {share:>15}")
+            coasted = statistics.median(r.get("coasted", 0.0) for r in results)
+            print(
+                f"{variant:>12} {wall:9.1f} {step:9.1f} {kernel:10.1f} {share:>15} "
+                f"{100 * coasted:7.0f} %"
+            )
         if args.against:
             ratios = [a["wall"] / b["wall"] for a, b in zip(*runs.values(), strict=True)]
             print(f"wall ratio this tree / {args.against}: median {statistics.median(ratios):.3f} "

@@ -99,9 +99,10 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
         state[9, c] = x_ref[i, 1]
     saved = state[:5].copy()
     if math.isinf(v_cap):  # a literal infinite cap: the compiler drops the cap's test
-        _steps(state, steps, dt, damp, math.inf, maxima)
+        unforced = gravity[0] == 0.0 and gravity[1] == 0.0 and damp == 1.0 and v_cap > 0.0
+        _steps(state, steps, dt, damp, math.inf, maxima, unforced)
     else:
-        _steps(state, steps, dt, damp, v_cap, maxima)
+        _steps(state, steps, dt, damp, v_cap, maxima, False)
     for c in range(count):
         i = index[c]
         x[i, 0] = state[0, c]
@@ -116,11 +117,15 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def _steps(state, steps, dt, damp, v_cap, maxima):
-    """``steps`` steps of the granules of state (``coast``), each over all of them (a loop the
+def _steps(state, steps, dt, damp, v_cap, maxima, unforced):
+    """``steps`` steps of the granules of state (``coast``), each over all of them (loops the
     compiler vectorises); the largest |x − x_ref|², |v|², |v + ½ dt a|² after each step to
     maxima. None is negative, so the largest is found on their bits as integers (the same
-    order; a loop over floats the compiler would not vectorise)."""
+    order; a loop over floats the compiler would not vectorise).
+
+    unforced: no acceleration, no drag, no cap. After the first step, which turns a −0
+    velocity into +0, the velocities are then constant to the bit ((v + dt·0)·1 = v), and so
+    are the speeds: the steps after it only drift."""
     count = state.shape[1]
     px, py, vx, vy, wi = state[0], state[1], state[2], state[3], state[4]
     ax, ay, alpha, rx, ry = state[5], state[6], state[7], state[8], state[9]
@@ -129,6 +134,17 @@ def _steps(state, steps, dt, damp, v_cap, maxima):
     bits = moved.view(np.int64)
     h = 0.5 * dt
     for s in range(steps):
+        if unforced and s > 0:
+            for c in range(count):
+                px[c] = px[c] + dt * vx[c]
+                py[c] = py[c] + dt * vy[c]
+                ex = px[c] - rx[c]
+                ey = py[c] - ry[c]
+                moved[0, c] = ex * ex + ey * ey
+            maxima[s, 1] = maxima[0, 1]
+            maxima[s, 2] = maxima[0, 2]
+            largest[s, 0] = _largest(bits[0])
+            continue
         for c in range(count):
             px[c], py[c], vx[c], vy[c], wi[c] = kick_drift(
                 px[c], py[c], vx[c], vy[c], wi[c], ax[c], ay[c], alpha[c], dt, damp, v_cap
@@ -137,10 +153,16 @@ def _steps(state, steps, dt, damp, v_cap, maxima):
                 px[c], py[c], vx[c], vy[c], ax[c], ay[c], rx[c], ry[c], h
             )
         for q in range(3):
-            top = 0
-            for c in range(count):
-                top = max(top, bits[q, c])
-            largest[s, q] = top
+            largest[s, q] = _largest(bits[q])
+
+
+@njit(cache=True, inline="always")
+def _largest(bits):
+    """The largest of bits (n,) int64, 0 for none."""
+    top = 0
+    for b in bits:
+        top = max(top, b)
+    return top
 
 
 @njit(cache=True, fastmath=FASTMATH)

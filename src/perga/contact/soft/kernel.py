@@ -38,8 +38,9 @@ most its largest displacement since plus the reach (``pair_force``).
 
 Integrator: symplectic Euler with velocity kicks (Hairer, Lubich & Wanner, Geometric Numerical
 Integration, 2006, ch. I; ``perga.contact.soft.stepping``): forces from (x, v, w) at step
-start, then v += (f/m + g) dt, w += tq/I dt, x += v dt with the new v. Optional global drag (implicit: v ← v/(1 + drag·dt))
-and a speed cap v_cap serve ``SoftGranules.relax`` only; normal runs have drag = 0,
+start, then v += (f/m + g) dt, w += tq/I dt, x += v dt with the new v. Optional global drag
+(implicit: v ← v/(1 + drag·dt)) and a speed cap v_cap serve ``SoftGranules.relax`` only;
+normal runs have drag = 0,
 v_cap = inf.
 
 Polygons (hammers, ``perga.contact.soft.polygon_forces``): during a call of n steps each polygon
@@ -533,30 +534,52 @@ def mark_special(wall_gap, covered, cstart, held, flags, order):
     return count
 
 
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _free_step(i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep):
+    """Granule i's step on the free path (``_integrate_free``); returns its |x − x_ref|²,
+    |v|², |v + ½ dt a_prev|²."""
+    fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
+    if keep:
+        f[i, 0] = fx
+        f[i, 1] = fy
+        tq[i] = t
+    kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
+    return motion_of(i, x, v, a_prev, x_ref, 0.5 * dt)
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _integrate_free(
-    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity, keep
+    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
+    gravity, keep,
 ):  # fmt: skip
     """The free path of ``_integrate_range``: every granule i of lo:hi not flagged sums its pair
     forces (acc, whose rows it zeroes for the next pair pass; into f and tq if keep) and moves
     (``stepping.kick_drift_one``); returns their (max displacement², max speed², max
-    extrapolated speed²) (``stepping.motion_of``). A function of its own, not inlined: the
-    small loop compiles tighter than inside the full path's function (docs/performance.md).
-    Compiled as the passes are (parallel=True, error_model="numpy": the same arithmetic)."""
-    h = 0.5 * dt
+    extrapolated speed²) (``stepping.motion_of``). While granules coast, free lists the
+    unflagged ones in increasing order (empty otherwise): the loop takes them from it instead
+    of testing every granule's flag, a branch the coasting granules would make unpredictable.
+    A function of its own, not inlined: the small loop compiles tighter than inside the full
+    path's function (docs/performance.md). Compiled as the passes are (parallel=True,
+    error_model="numpy": the same arithmetic)."""
     dmax = 0.0
     smax = 0.0
     umax = 0.0
-    for i in range(lo, hi):
-        if flags[i]:
-            continue
-        fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
-        if keep:
-            f[i, 0] = fx
-            f[i, 1] = fy
-            tq[i] = t
-        kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
-        d2, s2, u2 = motion_of(i, x, v, a_prev, x_ref, h)
+    if free.shape[0] == 0:
+        for i in range(lo, hi):
+            if flags[i]:
+                continue
+            d2, s2, u2 = _free_step(
+                i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep
+            )
+            dmax = max(dmax, d2)
+            smax = max(smax, s2)
+            umax = max(umax, u2)
+        return dmax, smax, umax
+    for a in range(np.searchsorted(free, lo), np.searchsorted(free, hi)):
+        d2, s2, u2 = _free_step(
+            free[a], x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity,
+            keep,
+        )  # fmt: skip
         dmax = max(dmax, d2)
         smax = max(smax, s2)
         umax = max(umax, u2)
@@ -570,7 +593,7 @@ def _integrate_range(
     ploads, x_ref, scalars,
 ):  # fmt: skip
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
-    fields, cand's), walls_near = (wall_gap (``wall_gaps``), flags, order) and scalars = (dt,
+    fields, cand's), walls_near = (wall_gap (``wall_gaps``), flags, order, free) and scalars = (dt,
     damp = 1/(1 + drag·dt), v_cap, step, reach, near, gravity, keep) (tuples: a call of more
     than 30 arguments compiles to one numba cannot inline): a granule's walls are evaluated only
     where wall_gap ≤ near; the total force and torque go to f and tq only if keep (the call's
@@ -584,7 +607,7 @@ def _integrate_range(
     A granule's step reads and writes only its own state (and its candidate entries), so the
     split gives the same floats."""
     dt, damp, v_cap, step, reach, near, gravity, keep = scalars
-    wall_gap, flags, order = walls_near
+    wall_gap, flags, order, free = walls_near
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
@@ -640,8 +663,8 @@ def _integrate_range(
         smax = max(smax, s2)
         umax = max(umax, u2)
     fmax = _integrate_free(
-        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, dt, damp, v_cap, gravity,
-        keep,
+        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
+        gravity, keep,
     )  # fmt: skip
     dmax = max(dmax, fmax[0])
     smax = max(smax, fmax[1])
@@ -666,7 +689,7 @@ def _integrate(
     (``TableArrays``) and history phist; entry e's load on its polygon and dissipation go to
     cand.loads[e] (``polygon_forces.add_loads``). ``bonds`` (``Bonds``) hold or release each
     granule (module doc); ``step`` is the step's number; reach, m: as in ``pair_force``;
-    walls_near = (wall_gap, flags, order): the walls of granule i are evaluated only where
+    walls_near = (wall_gap, flags, order, free): the walls of granule i are evaluated only where
     wall_gap[i] ≤ near, m (``wall_gaps``), and only the granules flagged by ``mark_special``
     (listed in order) take the full path (``_integrate_range``). The
     polygon bundles come as arguments, not as a ``Polygons``: a parallel loop takes a named
@@ -853,6 +876,7 @@ def _advance(
     maxima = np.empty((n_steps, 3))
     coasting = (np.empty(0, np.int64), np.empty((5, 0)), np.empty((3, 0)))
     first_coast = 0
+    free = np.empty(0, np.int64)
     speed = 0.0
     past = False
     coasted = 0
@@ -862,6 +886,7 @@ def _advance(
             rewind(granules, flags, coasting, (step - first_coast, dt, damp, settings.v_cap))
             coasted -= coasting[0].shape[0] * (n_steps - step)
             coasting = (coasting[0][:0], np.empty((5, 0)), np.empty((3, 0)))
+            free = free[:0]
             past = True
         rebuilt = need
         if need:
@@ -905,6 +930,7 @@ def _advance(
             )  # fmt: skip
             first_coast = step
             coasted += coasting[0].shape[0] * (n_steps - step)
+            free = np.flatnonzero(flags == 0) if coasting[0].shape[0] > 0 else free[:0]
         past = False
         if pairs:
             pair_pass(
@@ -914,7 +940,7 @@ def _advance(
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,
             settings, work, x_ref, chunk, settings.first_step + step, reach,
-            (wall_gap, flags, order[:n_special]), near,
+            (wall_gap, flags, order[:n_special], free), near,
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
