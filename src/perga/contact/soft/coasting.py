@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from perga.contact.soft.stepping import add_pair_forces, kick_drift, motion
+from perga.contact.soft.stepping import add_pair_forces, kick_drift, motion, store
 from perga.geometry.disc_polygon import FASTMATH
 
 COAST = 2
@@ -105,14 +105,8 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
         _steps(state, steps, dt, damp, v_cap, maxima, False)
     for c in range(count):
         i = index[c]
-        x[i, 0] = state[0, c]
-        x[i, 1] = state[1, c]
-        v[i, 0] = state[2, c]
-        v[i, 1] = state[3, c]
-        w[i] = state[4, c]
-        a_prev[i, 0] = state[5, c]
-        a_prev[i, 1] = state[6, c]
-        a_prev[i, 2] = state[7, c]
+        px, py, vx, vy, wi = state[0, c], state[1, c], state[2, c], state[3, c], state[4, c]
+        store(i, x, v, w, a_prev, px, py, vx, vy, wi, state[5, c], state[6, c], state[7, c])
     return index, saved, state[5:8].copy()
 
 
@@ -180,11 +174,4 @@ def rewind(granules, flags, coasting, scalars):
         ax, ay, alpha = acc[0, c], acc[1, c], acc[2, c]
         for _ in range(steps):
             px, py, vx, vy, wi = kick_drift(px, py, vx, vy, wi, ax, ay, alpha, dt, damp, v_cap)
-        x[i, 0] = px
-        x[i, 1] = py
-        v[i, 0] = vx
-        v[i, 1] = vy
-        w[i] = wi
-        a_prev[i, 0] = ax
-        a_prev[i, 1] = ay
-        a_prev[i, 2] = alpha
+        store(i, x, v, w, a_prev, px, py, vx, vy, wi, ax, ay, alpha)

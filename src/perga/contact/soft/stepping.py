@@ -64,6 +64,20 @@ def kick_drift(px, py, vx, vy, wi, ax, ay, alpha, dt, damp, v_cap):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
+def store(i, x, v, w, a_prev, px, py, vx, vy, wi, ax, ay, alpha):
+    """Write granule i's position (px, py), velocity (vx, vy), angular velocity wi and
+    accelerations (ax, ay, alpha) into the arrays."""
+    x[i, 0] = px
+    x[i, 1] = py
+    v[i, 0] = vx
+    v[i, 1] = vy
+    w[i] = wi
+    a_prev[i, 0] = ax
+    a_prev[i, 1] = ay
+    a_prev[i, 2] = alpha
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
 def kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev):
     """``kick_drift`` for granule i of the arrays from its force (fx, fy), N, and torque t,
     N·m; records a_prev[i]."""
@@ -71,14 +85,7 @@ def kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, 
     px, py, vx, vy, wi = kick_drift(
         x[i, 0], x[i, 1], v[i, 0], v[i, 1], w[i], ax, ay, alpha, dt, damp, v_cap
     )
-    v[i, 0] = vx
-    v[i, 1] = vy
-    w[i] = wi
-    a_prev[i, 0] = ax
-    a_prev[i, 1] = ay
-    a_prev[i, 2] = alpha
-    x[i, 0] = px
-    x[i, 1] = py
+    store(i, x, v, w, a_prev, px, py, vx, vy, wi, ax, ay, alpha)
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
