@@ -771,9 +771,10 @@ def _motion(x, v, a_prev, x_ref, dt):
 @njit(cache=True)
 def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
     """Advance settings.n_steps symplectic Euler steps on one thread; returns (start, nbr, hist,
-    n_rebuilds, cand_start, cand_polygon, n_lists): the neighbour list after the call, the
-    number of rebuilds, the polygon candidate list after the call (``CandidateList``'s start
-    and polygon) and the number of candidate lists built.
+    n_rebuilds, cand_start, cand_polygon, n_lists, coasted): the neighbour list after the call,
+    the number of rebuilds, the polygon candidate list after the call (``CandidateList``'s start
+    and polygon), the number of candidate lists built and the granule steps taken coasting
+    (``perga.contact.soft.coasting``, where settings.coast).
 
     The bundles are those of the module doc; each may also be a plain tuple in its fields' order
     (``tuple(bundle)``, for ``Polygons`` its parts too): numba types a named-tuple argument by
@@ -878,16 +879,17 @@ def _advance(
     first_coast = 0
     free = np.empty(0, np.int64)
     speed = 0.0
-    past = False
+    outran = False  # a granule that does not coast went faster than speed in the last step
     coasted = 0
     for step in range(n_steps):
         reach = dt * math.sqrt(umax)
-        if coasting[0].shape[0] > 0 and (need or past or math.sqrt(dmax) + reach > covered):
+        decide = False  # which granules coast, for the steps left
+        if coasting[0].shape[0] > 0 and (need or outran or math.sqrt(dmax) + reach > covered):
             rewind(granules, flags, coasting, (step - first_coast, dt, damp, settings.v_cap))
             coasted -= coasting[0].shape[0] * (n_steps - step)
             coasting = (coasting[0][:0], np.empty((5, 0)), np.empty((3, 0)))
             free = free[:0]
-            past = True
+            decide = True
         rebuilt = need
         if need:
             if pairs:
@@ -920,8 +922,8 @@ def _advance(
         if rebuilt or step == 0 or near > covered:  # wall gaps or candidates new, near grown
             covered = near + SPECIAL_MARGIN * skin
             n_special = mark_special(wall_gap, covered, cand.start, bonds.held, flags, order)
-            past = True
-        if settings.coast and past and coasting[0].shape[0] == 0 and n_steps - step > 1:
+            decide = True
+        if settings.coast and decide and coasting[0].shape[0] == 0 and n_steps - step > 1:
             speed = speed_bound(smax, umax, gravity, n_steps - step, dt)
             coasting = coast(
                 granules, props, work.acc, work.f, work.tq, x_ref,
@@ -931,7 +933,6 @@ def _advance(
             first_coast = step
             coasted += coasting[0].shape[0] * (n_steps - step)
             free = np.flatnonzero(flags == 0) if coasting[0].shape[0] > 0 else free[:0]
-        past = False
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
@@ -955,8 +956,8 @@ def _advance(
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
             counts[COUNT_CONTACT_CHANGES] += int(chunk[c, 4])
             counts[COUNT_RELEASES] += int(chunk[c, 5])
+        outran = coasting[0].shape[0] > 0 and max(smax, umax) > speed * speed
         if coasting[0].shape[0] > 0:
-            past = max(smax, umax) > speed * speed
             dmax = max(dmax, maxima[step - first_coast, 0])
             smax = max(smax, maxima[step - first_coast, 1])
             umax = max(umax, maxima[step - first_coast, 2])
