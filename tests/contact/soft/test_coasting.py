@@ -76,17 +76,19 @@ def test_a_pushed_row_rewinds_when_a_granule_outruns_the_bound() -> None:
 def test_a_granule_falling_onto_a_held_one_meets_it_within_a_call() -> None:
     """Two granules at rest, the lower held by a bond, the upper 10 µm above it under a gravity
     that makes it fall 50 µm in a call of 10 steps: at rest the speed bound is gravity's part
-    alone, which must keep the upper one from coasting through the contact."""
+    alone, which must keep the upper one from coasting through the contact. A third granule,
+    far from both, coasts."""
     row = contact_parameters("linear", 0.8, k_n=1e4)
     gap = 1e-5
     g = SoftGranules(
-        [[0.0, 0.0], [0.0, 2 * RADIUS + gap]], [RADIUS] * 2, [MASS] * 2, uniform_table(row),
-        held=[True, False], bond_force=[np.inf, 0.0],
+        [[0.0, 0.0], [0.0, 2 * RADIUS + gap], [20 * RADIUS, 0.0]], [RADIUS] * 3, [MASS] * 3,
+        uniform_table(row), held=[True, False, False], bond_force=[np.inf, 0.0, 0.0],
     )  # fmt: skip
     g.gravity[:] = (0.0, -2 * 5 * gap / (10 * g.dt) ** 2)  # ½ g (10 dt)² = 5 gaps
     on, off = _both(g, 3, 10)
     _assert_same(on, off)
     assert off.dissipated[0] > 0.0  # they met
+    assert 0 < on.coasted <= on.steps  # the far granule alone
 
 
 def test_relax_coasts_to_the_same_floats() -> None:
