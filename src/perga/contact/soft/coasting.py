@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
-from perga.contact.soft.stepping import add_pair_forces, kick_drift, motion, store
+from perga.contact.soft.stepping import accelerations, add_pair_forces, kick_drift, motion, store
 from perga.geometry.disc_polygon import FASTMATH
 
 COAST = 2
@@ -59,7 +59,7 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
     pairs); scalars = (S, dt, gravity, damp, v_cap, V). A pair holding a tangential spring
     stops both from coasting whatever its distance (the pair pass must release the spring)."""
     x, v, w, a_prev = granules
-    r = props.r
+    r, m, inertia = props.r, props.m, props.inertia
     start, nbr, hist = nbrs
     steps, dt, gravity, damp, v_cap, speed = scalars
     n = x.shape[0]
@@ -84,9 +84,7 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
         f[i, 0] = fx
         f[i, 1] = fy
         tq[i] = t
-        ax = fx + gravity[0]  # = fx/m + g: fx = ±0 and m > 0 (``stepping.accelerations``)
-        ay = fy + gravity[1]
-        alpha = t  # = t/I
+        ax, ay, alpha = accelerations(i, m, inertia, fx, fy, t, gravity)
         state[0, c] = x[i, 0]
         state[1, c] = x[i, 1]
         state[2, c] = v[i, 0]
@@ -98,8 +96,8 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
         state[8, c] = x_ref[i, 0]
         state[9, c] = x_ref[i, 1]
     saved = state[:5].copy()
-    if math.isinf(v_cap):  # a literal infinite cap: the compiler drops the cap's test
-        unforced = gravity[0] == 0.0 and gravity[1] == 0.0 and damp == 1.0 and v_cap > 0.0
+    if v_cap == math.inf:  # a literal infinite cap: the compiler drops the cap's test
+        unforced = gravity[0] == 0.0 and gravity[1] == 0.0 and damp == 1.0
         _steps(state, steps, dt, damp, math.inf, maxima, unforced)
     else:
         _steps(state, steps, dt, damp, v_cap, maxima, False)
@@ -165,13 +163,13 @@ def rewind(granules, flags, coasting, scalars):
     coasting (``coast``) where their first ``steps`` (≥ 1) steps take them and clear their
     flags; scalars = (steps, dt, damp, v_cap)."""
     x, v, w, a_prev = granules
-    index, saved, acc = coasting
+    index, saved, accel = coasting
     steps, dt, damp, v_cap = scalars
     for c in range(index.shape[0]):
         i = index[c]
         flags[i] = 0
         px, py, vx, vy, wi = saved[0, c], saved[1, c], saved[2, c], saved[3, c], saved[4, c]
-        ax, ay, alpha = acc[0, c], acc[1, c], acc[2, c]
+        ax, ay, alpha = accel[0, c], accel[1, c], accel[2, c]
         for _ in range(steps):
             px, py, vx, vy, wi = kick_drift(px, py, vx, vy, wi, ax, ay, alpha, dt, damp, v_cap)
         store(i, x, v, w, a_prev, px, py, vx, vy, wi, ax, ay, alpha)
