@@ -52,7 +52,9 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
     COAST in flags (n,) int8, writes its contact force and torque (zero) to f and tq, and the
     largest |x − x_ref|², |v|² and |v + ½ dt a_prev|² of the coasting granules after each step
     to maxima[:S] (S, 3); returns, for ``rewind``, their indices (count,) int64, their x, y,
-    vx, vy, w before (5, count) and their accelerations a_x, a_y, α (3, count).
+    vx, vy, w before (5, count) and their accelerations a_x, a_y, α (3, count), and the
+    indices of the granules left unflagged (flags 0: the free path's list), each in increasing
+    order.
 
     granules, props: as in ``kernel.Granules`` and ``kernel.GranuleProps``; acc, f, tq as in
     ``kernel.Work``; nbrs = (start, nbr, hist) the half list (another length of start: no
@@ -74,8 +76,18 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
             if hist[k] != 0.0 or dx * dx + dy * dy <= keep * keep:
                 near[i] = True
                 near[j] = True
-    index = np.flatnonzero(~near)
-    count = index.shape[0]
+    index = np.empty(n, np.int64)
+    free = np.empty(n, np.int64)
+    count = 0
+    n_free = 0
+    for i in range(n):
+        if not near[i]:
+            index[count] = i
+            count += 1
+        elif flags[i] == 0:
+            free[n_free] = i
+            n_free += 1
+    index = index[:count]
     state = np.empty((10, count))  # x, y, vx, vy, w, a_x, a_y, α, and x_ref's x, y
     for c in range(count):
         i = index[c]
@@ -105,7 +117,7 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
         i = index[c]
         px, py, vx, vy, wi = state[0, c], state[1, c], state[2, c], state[3, c], state[4, c]
         store(i, x, v, w, a_prev, px, py, vx, vy, wi, state[5, c], state[6, c], state[7, c])
-    return index, saved, state[5:8].copy()
+    return (index, saved, state[5:8].copy()), free[:n_free]
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)

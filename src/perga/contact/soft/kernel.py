@@ -925,14 +925,14 @@ def _advance(
             decide = True
         if settings.coast and decide and coasting[0].shape[0] == 0 and n_steps - step > 1:
             speed = speed_bound(smax, umax, gravity, n_steps - step, dt)
-            coasting = coast(
+            coasting, free = coast(
                 granules, props, work.acc, work.f, work.tq, x_ref,
                 (start, nbr, hist) if pairs else (start[:0], nbr, hist), flags,
                 (n_steps - step, dt, gravity, damp, settings.v_cap, speed), maxima,
             )  # fmt: skip
             first_coast = step
             coasted += coasting[0].shape[0] * (n_steps - step)
-            free = np.flatnonzero(flags == 0) if coasting[0].shape[0] > 0 else free[:0]
+            free = free if coasting[0].shape[0] > 0 else free[:0]
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
