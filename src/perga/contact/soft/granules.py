@@ -343,6 +343,14 @@ class SoftGranules:
                 self.skin = skin
                 self._rebuild = True
 
+    @property
+    def polygon_candidates(self) -> np.ndarray:
+        """The start (n + 1,) of the polygon candidate list the last call used
+        (``kernel.CandidateList``; granule i's entries are start[i]:start[i + 1]), or an empty
+        array where none is kept. Every pair in contact at the call's end is in it
+        (``polygon_forces.candidates``)."""
+        return self._listed[0]
+
     def _forget_candidates(self) -> None:
         """Drop the polygon candidate list the kernel keeps from call to call
         (``kernel.CandidateList``): the next call builds one."""

@@ -146,7 +146,9 @@ class SoftImpactLog:
         hist = g.polygon_hist
         if self._changes.shape[0] < self._active.size:
             self._changes = np.empty((self._active.size, 3), dtype=np.int64)
-        count = _contact_changes(hist, self._active, self._is_hammer, self._changes)
+        count = _contact_changes(
+            hist, self._active, self._is_hammer, g.polygon_candidates, self._changes
+        )
         if count == 0:
             return
         ids = self._ids()
@@ -243,13 +245,28 @@ def _copy(source, target):
 
 @numba.njit(cache=True)
 def _contact_changes(
-    hist: np.ndarray, active: np.ndarray, is_hammer: np.ndarray, out: np.ndarray
+    hist: np.ndarray,
+    active: np.ndarray,
+    is_hammer: np.ndarray,
+    candidates: np.ndarray,
+    out: np.ndarray,
 ) -> int:
     """Compare each (granule, polygon) contact flag of the kernel's polygon history with
     ``active`` (hammer polygons only) and bring ``active`` up to date; the changes go to the
-    rows of ``out`` as (granule row, polygon, 1 opened / 0 closed). Returns their number."""
+    rows of ``out`` as (granule row, polygon, 1 opened / 0 closed), in row order. Returns their
+    number.
+
+    Only the rows that can have changed in the kernel's last call are read: those with an
+    entry in its candidate list (``candidates``: ``SoftGranules.polygon_candidates``) or an
+    open contact in ``active``. A pair in contact at the call's end was in the list of its last
+    step (the list keeps every pair in contact), so a pair of any other row was in contact at
+    neither end. With no list kept (another length) every row is read. The history is read
+    strided, (n, n_poly, columns) doubles: reading every row cost most of a look."""
     count = 0
+    listed = candidates.shape[0] == hist.shape[0] + 1
     for i in range(hist.shape[0]):
+        if listed and candidates[i + 1] == candidates[i] and not active[i].any():
+            continue
         for k in range(hist.shape[1]):
             now = is_hammer[k] and hist[i, k, HIST_ACTIVE] != 0.0
             if now != active[i, k]:
