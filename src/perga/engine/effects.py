@@ -108,8 +108,15 @@ class KickRunner:
         """Kick every granule over ``dt`` (internal time units)."""
         if self.granules.count == 0:
             return
+        velocities, positions, velocity_unit, length_unit = self.granules.read(
+            positions=self._positions
+        )
         granules = Granules(
-            *self.granules.read(positions=self._positions), *self.granules.constants()
+            np.ascontiguousarray(velocities),  # the kernel's own array; a rigid read's copy
+            None if positions is None else np.ascontiguousarray(positions),
+            velocity_unit,
+            length_unit,
+            *self.granules.constants(),
         )
         for effect in self.kicks:
             effect.kick(granules, dt)
@@ -117,8 +124,8 @@ class KickRunner:
 
 
 class Granules(NamedTuple):
-    """The granules a kick changes: velocities (n, 2) and positions (n, 2) or None in the
-    contact model's units, the internal velocity and length units in those
+    """The granules a kick changes: velocities (n, 2) and positions (n, 2) or None, C-contiguous,
+    in the contact model's units, the internal velocity and length units in those
     (:class:`~perga.contact.protocol.GranuleKinematics`), masses (kg), radii (m)."""
 
     velocities: FloatArray
@@ -340,28 +347,54 @@ def _floor_kick(
     """Floor friction on every granule in place (:class:`FloorFriction`): the velocity relative
     to the floor (ω × x; ω = 0 for a stationary floor) loses at most ``dv_max`` of its length;
     returns the energy removed and the floor's work, Σ over granules (masses ``m`` in kg, ``v``
-    and ``x`` in the units whose internal ones are ``velocity_unit`` and ``length_unit``,
-    everything else and the results in internal units)."""
+    and ``x`` (n, 2), C-contiguous, in the units whose internal ones are ``velocity_unit`` and
+    ``length_unit``, everything else and the results in internal units)."""
+    if velocity_unit == 1.0:  # a unit of 1 inlined: its divisions fold away (x / 1 is x)
+        return _floor_kicks(v, x, m, dv_max, omega, 1.0, length_unit)
+    return _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit)
+
+
+@numba.njit(fastmath=False, inline="always")
+def _floor_kicks(
+    v: FloatArray,
+    x: FloatArray,
+    m: FloatArray,
+    dv_max: float,
+    omega: float,
+    velocity_unit: float,
+    length_unit: float,
+) -> tuple[float, float]:
+    """:func:`_floor_kick` in two loops: the kicks, over flat views and with selects for the
+    granules at rest relative to the floor, which the compiler vectorises (IEEE division and
+    square root are exact per lane: the same floats as one granule at a time), then the sums
+    in granule order, to which a granule at rest adds −0.0 (x + (−0.0) is x for every x)."""
+    n = v.shape[0]
+    vf = v.reshape(-1)
+    xf = x.reshape(-1)
+    removed_each = np.empty(n)
+    supplied_each = np.empty(n)
+    for i in range(n):
+        fx = -omega * (xf[2 * i + 1] / length_unit)
+        fy = omega * (xf[2 * i] / length_unit)
+        rx = vf[2 * i] / velocity_unit - fx
+        ry = vf[2 * i + 1] / velocity_unit - fy
+        speed = math.sqrt(rx * rx + ry * ry)
+        moving = speed > 0.0
+        scale = 1.0 - min(dv_max, speed) / (speed if moving else 1.0)
+        ax = rx * scale
+        ay = ry * scale
+        vf[2 * i] = (fx + ax) * velocity_unit if moving else vf[2 * i]
+        vf[2 * i + 1] = (fy + ay) * velocity_unit if moving else vf[2 * i + 1]
+        mass = m[i] / MASS
+        removed = 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
+        supplied = mass * ((ax - rx) * fx + (ay - ry) * fy)
+        removed_each[i] = removed if moving else -0.0
+        supplied_each[i] = supplied if moving else -0.0
     removed = 0.0
     supplied = 0.0
-    scaled = velocity_unit != 1.0  # a unit of 1 is not divided by: the same floats, faster
-    for i in range(v.shape[0]):
-        fx = -omega * (x[i, 1] / length_unit)
-        fy = omega * (x[i, 0] / length_unit)
-        vx = v[i, 0] / velocity_unit if scaled else v[i, 0]
-        vy = v[i, 1] / velocity_unit if scaled else v[i, 1]
-        rx = vx - fx
-        ry = vy - fy
-        speed = math.sqrt(rx * rx + ry * ry)
-        if speed > 0.0:
-            scale = 1.0 - min(dv_max, speed) / speed
-            ax = rx * scale
-            ay = ry * scale
-            v[i, 0] = (fx + ax) * velocity_unit if scaled else fx + ax
-            v[i, 1] = (fy + ay) * velocity_unit if scaled else fy + ay
-            mass = m[i] / MASS
-            removed += 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
-            supplied += mass * ((ax - rx) * fx + (ay - ry) * fy)
+    for i in range(n):
+        removed += removed_each[i]
+        supplied += supplied_each[i]
     return removed, supplied
 
 
