@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import pickle
 
+import numba
 import numpy as np
 import pymunk
 import pytest
@@ -147,3 +148,26 @@ def test_body_views_are_made_again_after_pickling():
     assert body is not hammer_of(space)
     view[chipmunk_state.VIEW_T] = 6.0
     assert body.torque == 6.0 and hammer_of(space).torque != 6.0
+
+
+@numba.njit
+def _write_torque(addresses, torque):
+    """Compiled code writing body 0's torque through its address (as ``Machine.set_loads``)."""
+    raw = chipmunk_state.doubles_at(addresses[0], chipmunk_state.VIEW_WIDTH)
+    old = raw[chipmunk_state.VIEW_T]
+    raw[chipmunk_state.VIEW_T] = torque
+    return old
+
+
+def test_addresses_reach_the_struct_and_are_taken_again_after_pickling():
+    """Compiled code reads and writes a body through its view's address; a pickled copy's
+    addresses are those of the copy's bodies, not the original's."""
+    space = hinged_hammer()
+    body = hammer_of(space)
+    body.torque = 1.5
+    views = BodyViews([body])
+    assert _write_torque(views.addresses(), 2.5) == 1.5
+    assert body.torque == 2.5
+    copy_space, copy = pickle.loads(pickle.dumps((space, views)))
+    assert _write_torque(copy.addresses(), 7.0) == 2.5
+    assert hammer_of(copy_space).torque == 7.0 and body.torque == 2.5

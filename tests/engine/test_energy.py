@@ -368,10 +368,11 @@ def test_pivot_work_is_the_impulse_times_the_anchor_velocities() -> None:
         @ (_anchor_velocity(before, after, 1, hinge) - _anchor_velocity(before, after, 0, hinge)),
         impulses[1] @ -_anchor_velocity(before, after, 0, arms[1]),
     ]
+    at = np.array([row.ctypes.data for row in impulses], dtype=np.uint64)  # as JointImpulses
     for k in range(2):
-        work = _pivot_work(before, after, rows[k : k + 1], arms[k : k + 1], (impulses[k],))
+        work = _pivot_work(before, after, rows[k : k + 1], arms[k : k + 1], at[k : k + 1])
         assert work == pytest.approx(expected[k], rel=1e-12)
-    total = _pivot_work(before, after, rows, arms, tuple(impulses))
+    total = _pivot_work(before, after, rows, arms, at)
     assert total == pytest.approx(sum(expected), rel=1e-12)
 
 

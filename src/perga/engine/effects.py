@@ -38,7 +38,7 @@ import pymunk
 from numpy.typing import NDArray
 
 from perga.engine import units as u
-from perga.engine.chipmunk_state import JointImpulses
+from perga.engine.chipmunk_state import JointImpulses, doubles_at
 from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
@@ -212,7 +212,7 @@ class ConstraintLosses(Effect):
             self._rows = np.array(rows, dtype=np.int64).reshape(-1, 2)
         if self._rows.size:
             self._removed = _constraint_losses(
-                self._removed, self._impulses.views(), self._rows, before.table, after.table
+                self._removed, self._impulses.addresses(), self._rows, before.table, after.table
             )
 
 
@@ -317,20 +317,21 @@ class AirDrag(Kick):
 @numba.njit(cache=True, fastmath=False)
 def _constraint_losses(
     removed: float,
-    impulses: tuple[np.ndarray, ...],
+    impulses: NDArray[np.uint64],
     rows: np.ndarray,
     before: np.ndarray,
     after: np.ndarray,
 ) -> float:
     """``removed`` less j·ω̄_rel for each constraint (:meth:`ConstraintLosses.account`): angular
-    impulse ``impulses[c][0]`` (its jAcc in place) on body ``rows[c, 1]`` against ``rows[c, 0]``,
+    impulse j (its jAcc, the double at the address ``impulses[c]``, :meth:`~perga.engine.
+    chipmunk_state.JointImpulses.addresses`) on body ``rows[c, 1]`` against ``rows[c, 0]``,
     ω̄_rel the mean of their relative angular velocity at the step's start and end (column 5
     of the machine-state tables ``before`` and ``after``), in turn."""
     for c in range(rows.shape[0]):
         a = rows[c, 0]
         b = rows[c, 1]
         rel = (before[b, 5] - before[a, 5]) + (after[b, 5] - after[a, 5])
-        removed -= impulses[c][0] * (0.5 * rel)
+        removed -= doubles_at(impulses[c], 1)[0] * (0.5 * rel)
     return removed
 
 

@@ -66,15 +66,13 @@ import numpy as np
 import pymunk
 
 from perga.engine import units as u
-from perga.engine.chipmunk_state import JointImpulses
+from perga.engine.chipmunk_state import JointImpulses, doubles_at
 from perga.engine.effects import ConstraintLosses, Drive
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
 
 STATIC = -1
 """A pin's body row standing for the space's static body (:func:`_pivot_work`)."""
-_NO_PINS = (np.zeros(2),)
-"""The pins' impulses where there is no pin (numba cannot take an empty tuple)."""
 
 
 def _kinetic(body: pymunk.Body) -> float:
@@ -146,8 +144,7 @@ class EnergyMeter:
             return
         gx, gy = self._gravity
         work, moment = _machine_terms(
-            before.table, state.table, self._pin_rows, self._pin_arms,
-            self._pins.views() or _NO_PINS,
+            before.table, state.table, self._pin_rows, self._pin_arms, self._pins.addresses(),
             self._rows, self._mass, self._moment, gx * dt, gy * dt,
         )  # fmt: skip
         self._correction += work
@@ -190,7 +187,7 @@ def _machine_terms(
     after: np.ndarray,
     pin_rows: np.ndarray,
     pin_arms: np.ndarray,
-    impulses: tuple[np.ndarray, ...],
+    impulses: np.ndarray,
     rows: np.ndarray,
     mass: np.ndarray,
     moment: np.ndarray,
@@ -198,7 +195,7 @@ def _machine_terms(
     gy_dt: float,
 ) -> tuple[float, float]:
     """The step's terms from two machine-state tables (:class:`~perga.engine.machine.
-    MachineState`): the pins' work (:func:`_pivot_work`, pin k's jAcc ``impulses[k]`` in place)
+    MachineState`): the pins' work (:func:`_pivot_work`, pin k's jAcc at ``impulses[k]``)
     and the angular impulse on the bodies at ``rows`` besides gravity's
     (:func:`_moment_change`)."""
     return (
@@ -236,15 +233,16 @@ def _pivot_work(
     after: np.ndarray,
     rows: np.ndarray,
     arms: np.ndarray,
-    impulses: tuple[np.ndarray, ...],
+    impulses: np.ndarray,
 ) -> float:
     """Σ J·(v̄_b − v̄_a) over pivot joints: the work their position correction did in a step
     (an ideal pin does none). Joint k joins the bodies at ``rows[k]`` = (a, b) of two
     machine-state tables, b = :data:`STATIC` for the static body (at rest, its frame the
-    world's); J = ``impulses[k]`` (2,) acts on b at its anchor, ``arms[k]`` from b's centre of
-    gravity in b's frame; v̄ is each body's velocity at that point, the mean of before and after
-    the step, at the lever arm of the step's new positions (where Chipmunk applies the
-    impulse)."""
+    world's); J, the two doubles at the address ``impulses[k]`` (:meth:`~perga.engine.
+    chipmunk_state.JointImpulses.addresses`), acts on b at its anchor, ``arms[k]`` from b's
+    centre of gravity in b's frame; v̄ is each body's velocity at that point, the mean of
+    before and after the step, at the lever arm of the step's new positions (where Chipmunk
+    applies the impulse)."""
     total = 0.0
     for k in range(rows.shape[0]):
         a, b = rows[k, 0], rows[k, 1]
@@ -263,5 +261,6 @@ def _pivot_work(
         wa = 0.5 * (before[a, 5] + after[a, 5])
         vax = 0.5 * (before[a, 3] + after[a, 3]) - wa * ray
         vay = 0.5 * (before[a, 4] + after[a, 4]) + wa * rax
-        total += impulses[k][0] * (vbx - vax) + impulses[k][1] * (vby - vay)
+        j = doubles_at(impulses[k], 2)
+        total += j[0] * (vbx - vax) + j[1] * (vby - vay)
     return total

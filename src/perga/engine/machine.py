@@ -45,7 +45,9 @@ from perga.engine.chipmunk_state import (
     VIEW_TRANSFORM,
     VIEW_V,
     VIEW_W,
+    VIEW_WIDTH,
     BodyViews,
+    doubles_at,
 )
 from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
@@ -127,24 +129,24 @@ class Machine:
 
     def state(self) -> MachineState:
         """The machine's bodies now (:class:`MachineState`), one compiled read of their structs."""
-        views = self._views()
-        table = np.empty((len(views), 6))
-        _read_bodies(views, self._cogs, table)
+        addresses = self._addresses()
+        table = np.empty((len(addresses), 6))
+        _read_bodies(addresses, self._cogs, table)
         return MachineState(table)
 
     def set_loads(self, loads: FloatArray) -> None:
         """Set the force and torque of every body of :attr:`bodies` for the next step from
         ``loads`` (k, 3): fx, fy, torque, internal units, written raw into their structs."""
-        _write_loads(self._views(), loads)
+        _write_loads(self._addresses(), loads)
 
-    def _views(self) -> tuple[FloatArray, ...]:
-        """The raw views of :attr:`bodies` (made at first use, when the space is complete),
-        with their centres of gravity."""
+    def _addresses(self) -> NDArray[np.uint64]:
+        """The addresses of the raw views of :attr:`bodies` (made at first use, when the space
+        is complete), with their centres of gravity."""
         if self._raw is None:
             bodies = self.bodies
             self._raw = BodyViews(bodies)
             self._cogs = np.array([tuple(b.center_of_gravity) for b in bodies], dtype=float)
-        return self._raw.views()
+        return self._raw.addresses()
 
     @property
     def driven(self) -> bool:
@@ -206,14 +208,15 @@ class Machine:
 
 
 @numba.njit(cache=True)
-def _read_bodies(views: tuple[FloatArray, ...], cogs: FloatArray, out: FloatArray) -> None:
+def _read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArray) -> None:
     """Row j of ``out``: body j's centre of gravity in the world, angle, velocity and angular
-    velocity from its raw struct ``views[j]`` (:class:`MachineState`). The body's position is
+    velocity from its raw struct at ``addresses[j]`` (:class:`MachineState`;
+    :meth:`~perga.engine.chipmunk_state.BodyViews.addresses`). The body's position is
     its transform applied to the origin, as ``cpBodyGetPosition`` computes it, and the centre of
     gravity ``cogs[j]`` (body frame) is added turned by the angle: the same floats as pymunk's
     ``body.position`` + R(angle)·``center_of_gravity``."""
-    for j in range(len(views)):
-        raw = views[j]
+    for j in range(addresses.size):
+        raw = doubles_at(addresses[j], VIEW_WIDTH)
         t = VIEW_TRANSFORM
         x = raw[t] * 0.0 + raw[t + 2] * 0.0 + raw[t + 4]
         y = raw[t + 1] * 0.0 + raw[t + 3] * 0.0 + raw[t + 5]
@@ -228,10 +231,11 @@ def _read_bodies(views: tuple[FloatArray, ...], cogs: FloatArray, out: FloatArra
 
 
 @numba.njit(cache=True)
-def _write_loads(views: tuple[FloatArray, ...], loads: FloatArray) -> None:
-    """Body j's force and torque (its struct's f and t) from ``loads[j]`` = (fx, fy, torque)."""
-    for j in range(len(views)):
-        raw = views[j]
+def _write_loads(addresses: NDArray[np.uint64], loads: FloatArray) -> None:
+    """Body j's force and torque (the f and t of its struct at ``addresses[j]``) from
+    ``loads[j]`` = (fx, fy, torque)."""
+    for j in range(addresses.size):
+        raw = doubles_at(addresses[j], VIEW_WIDTH)
         raw[VIEW_F] = loads[j, 0]
         raw[VIEW_F + 1] = loads[j, 1]
         raw[VIEW_T] = loads[j, 2]
