@@ -9,6 +9,8 @@ kernel's per-contact totals: normal and tangential impulse, energy dissipated, t
 force and, for a Hertz contact, the peak pressure it gives, ``hertz_peak_pressure``). Normal and
 tangent turn with the hammer between start and end (they are fixed in the hammer's frame).
 An impact is written when it ends; its ``time`` is the end of the Pymunk step in which it began.
+The velocities and energies of all the contacts a look opens or closes are computed in one
+compiled call (``_contact_motion``), the hammers' states once per look.
 """
 
 from __future__ import annotations
@@ -97,24 +99,6 @@ class SoftImpactLog:
         self._vertices = granules.polygons.vertices.copy()
         self._com = granules.polygons.com.copy()
 
-    def _energy(self, i: int, v: np.ndarray, w: float) -> float:
-        g = self._g
-        return float(0.5 * g.m[i] * (v @ v) + 0.5 * g.inertia[i] * w * w)
-
-    def _relative(
-        self, i: int, k: int, x, v, w, n, com
-    ) -> tuple[float, float, tuple[float, float]]:
-        """Normal and tangential velocity of granule i's contact point relative to polygon k's
-        material point there (polygon centre of mass ``com``), and the point (m/s, m)."""
-        p = self._g.polygons
-        r = self._g.r[i]
-        point = (x[0] - r * n[0], x[1] - r * n[1])
-        t = (-n[1], n[0])
-        rel_x = v[0] - w * r * t[0] - (p.velocity[k, 0] - p.omega[k] * (point[1] - com[1]))
-        rel_y = v[1] - w * r * t[1] - (p.velocity[k, 1] + p.omega[k] * (point[0] - com[0]))
-        vn = float(rel_x * n[0] + rel_y * n[1])
-        return vn, float(rel_x * t[0] + rel_y * t[1]), (float(point[0]), float(point[1]))
-
     def before(self) -> None:
         """Keep the granules' and polygons' state before a kernel call (starts need it)."""
         g, p = self._g, self._g.polygons
@@ -136,90 +120,148 @@ class SoftImpactLog:
     def after(self, time: float, machine: MachineState, hammer_rows: np.ndarray) -> None:
         """Open and close impacts after a kernel call; ``time``: end of the step, s; ``machine``
         the machine now, hammer h's body in its row ``hammer_rows[h]``. The flags are compared
-        only when the kernel counted a change since the last look (``SoftGranules.counts``)."""
+        only when the kernel counted a change since the last look (``SoftGranules.counts``);
+        the contacts closed are completed first, then those opened are started, each in row
+        order."""
         g = self._g
         seen = int(g.counts[COUNT_CONTACT_CHANGES])
         if seen == self._seen:
             return
-        angles = machine.angle[hammer_rows]  # each hammer's body angle now, rad
         self._seen = seen
-        hist = g.polygon_hist
         if self._changes.shape[0] < self._active.size:
             self._changes = np.empty((self._active.size, 3), dtype=np.int64)
         count = _contact_changes(
-            hist, self._active, self._is_hammer, g.polygon_candidates, self._changes
+            g.polygon_hist, self._active, self._is_hammer, g.polygon_candidates, self._changes
         )
         if count == 0:
             return
+        changes = self._changes[:count].tolist()
+        angles = machine.angle[hammer_rows].tolist()  # each hammer's body angle now, rad
         ids = self._ids()
-        changes = self._changes[:count]
-        for i, k in changes[changes[:, 2] == 0, :2].tolist():
-            self._close(i, int(ids[i]), k, hist[i, k], angles)
-        for i, k in changes[changes[:, 2] == 1, :2].tolist():
-            angle = angles[self._hammer_of[k]]
-            self._open[(int(ids[i]), k)] = self._start(i, k, time, angle)
+        closed = [(i, k) for i, k, opened in changes if not opened]
+        opened = [(i, k) for i, k, opened in changes if opened]
+        if closed:
+            self._close(closed, ids, angles)
+        if opened:
+            self._start(opened, ids, time, angles)
 
-    def _start(self, i: int, k: int, time: float, angle: float) -> _Start:
-        p = self._g.polygons
-        d, nx, ny = closest_feature(
-            self._x[i, 0], self._x[i, 1], self._vertices, p.start, p.solid, p.corner, k
-        )
-        if not math.isfinite(d):  # before the call the centre faced another piece's feature
-            _, nx, ny = closest_feature(self._g.x[i, 0], self._g.x[i, 1], *p.outline(), k)
-        n = (float(nx), float(ny))
-        vn, vt, point = self._relative(
-            i, k, self._x[i], self._v[i], float(self._w[i]), n, self._com[k]
-        )
-        return _Start(
-            time=time,
-            normal=n,
-            hammer_angle=angle,
-            normal_velocity=vn,
-            tangential_velocity=vt,
-            point=point,
-            granule_energy=self._energy(i, self._v[i], float(self._w[i])),
-            granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
-            hammer=self._hammer_state(int(self._hammer_of[k])),
-        )
-
-    def _close(self, i: int, id_: int, k: int, row: np.ndarray, angles: np.ndarray) -> None:
-        start = self._open.pop((id_, k), None)
-        if start is None:  # began before the log (not expected: it starts with the run)
-            return
-        g = self._g
-        hammer = int(self._hammer_of[k])
-        n = _rotate(start.normal, float(angles[hammer]) - start.hammer_angle)
-        vn, vt, _ = self._relative(i, k, g.x[i], g.v[i], float(g.w[i]), n, g.polygons.com[k])
-        peak = float(row[HIST_PEAK_FORCE])
-        a, b = int(g.mat[i]), int(g.polygons.mat[k])
-        table = g.polygon_table
-        pressure = (
-            math.nan
-            if table is None or table.law[a, b] == LINEAR
-            else hertz_peak_pressure(peak, float(table.k_n[a, b]), float(g.r[i]))
-        )
-        self.impacts.append(
-            Impact(
-                time=start.time,
-                granule=id_,
-                hammer=hammer,
-                normal_velocity_before=start.normal_velocity,
-                normal_velocity_after=vn,
-                tangential_velocity_before=start.tangential_velocity,
-                tangential_velocity_after=vt,
-                normal_impulse=float(row[HIST_NORMAL_IMPULSE]),
-                point=start.point,
-                normal=start.normal,
-                granule_energy_gain=self._energy(i, g.v[i], float(g.w[i])) - start.granule_energy,
-                dissipated=float(row[HIST_DISSIPATED]),
-                hammer_energy_before=start.hammer.energy,
-                granule_velocity_before=start.granule_velocity,
-                hammer_swing_angle_before=start.hammer.swing_angle,
-                hammer_angular_velocity_before=start.hammer.angular_velocity,
-                peak_force=peak,
-                peak_pressure=pressure,
+    def _start(
+        self, opened: list[tuple[int, int]], ids: np.ndarray, time: float, angles: list[float]
+    ) -> None:
+        """Start an impact for each (granule row, polygon) of ``opened``: the granule's state
+        and the polygon's pose before the call, the hammer's state now."""
+        g, p = self._g, self._g.polygons
+        normals = []
+        for i, k in opened:
+            d, nx, ny = closest_feature(
+                self._x[i, 0], self._x[i, 1], self._vertices, p.start, p.solid, p.corner, k
             )
-        )
+            if not math.isfinite(d):  # before the call the centre faced another piece's feature
+                _, nx, ny = closest_feature(g.x[i, 0], g.x[i, 1], *p.outline(), k)
+            normals.append((float(nx), float(ny)))
+        rows = np.array(opened, dtype=np.int64).reshape(-1, 2)
+        motion = _contact_motion(
+            rows, np.array(normals).reshape(-1, 2), self._x, self._v, self._w, g.r, g.m,
+            g.inertia, self._com, p.velocity, p.omega,
+        ).tolist()  # fmt: skip
+        hammers: dict[int, HammerState] = {}
+        for (i, k), n, (vn, vt, px, py, energy) in zip(opened, normals, motion, strict=True):
+            hammer = int(self._hammer_of[k])
+            if hammer not in hammers:
+                hammers[hammer] = self._hammer_state(hammer)
+            self._open[(int(ids[i]), k)] = _Start(
+                time=time,
+                normal=n,
+                hammer_angle=angles[hammer],
+                normal_velocity=vn,
+                tangential_velocity=vt,
+                point=(px, py),
+                granule_energy=energy,
+                granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
+                hammer=hammers[hammer],
+            )
+
+    def _close(self, closed: list[tuple[int, int]], ids: np.ndarray, angles: list[float]) -> None:
+        """Complete the impact of each (granule row, polygon) of ``closed``: the granule's
+        state now, the contact's totals from the kernel's history."""
+        g = self._g
+        done = []
+        for i, k in closed:
+            start = self._open.pop((int(ids[i]), k), None)
+            if start is not None:  # None: began before the log (not expected)
+                done.append((i, k, start))
+        if not done:
+            return
+        hammers = [int(self._hammer_of[k]) for _, k, _ in done]
+        normals = [
+            _rotate(start.normal, angles[h] - start.hammer_angle)
+            for (_, _, start), h in zip(done, hammers, strict=True)
+        ]
+        rows = np.array([(i, k) for i, k, _ in done], dtype=np.int64)
+        motion = _contact_motion(
+            rows, np.array(normals), g.x, g.v, g.w, g.r, g.m, g.inertia, g.polygons.com,
+            g.polygons.velocity, g.polygons.omega,
+        ).tolist()  # fmt: skip
+        table = g.polygon_table
+        for (i, k, start), hammer, (vn, vt, _, _, energy) in zip(
+            done, hammers, motion, strict=True
+        ):
+            row = g.polygon_hist[i, k]
+            peak = float(row[HIST_PEAK_FORCE])
+            a, b = int(g.mat[i]), int(g.polygons.mat[k])
+            pressure = (
+                math.nan
+                if table is None or table.law[a, b] == LINEAR
+                else hertz_peak_pressure(peak, float(table.k_n[a, b]), float(g.r[i]))
+            )
+            self.impacts.append(
+                Impact(
+                    time=start.time,
+                    granule=int(ids[i]),
+                    hammer=hammer,
+                    normal_velocity_before=start.normal_velocity,
+                    normal_velocity_after=vn,
+                    tangential_velocity_before=start.tangential_velocity,
+                    tangential_velocity_after=vt,
+                    normal_impulse=float(row[HIST_NORMAL_IMPULSE]),
+                    point=start.point,
+                    normal=start.normal,
+                    granule_energy_gain=energy - start.granule_energy,
+                    dissipated=float(row[HIST_DISSIPATED]),
+                    hammer_energy_before=start.hammer.energy,
+                    granule_velocity_before=start.granule_velocity,
+                    hammer_swing_angle_before=start.hammer.swing_angle,
+                    hammer_angular_velocity_before=start.hammer.angular_velocity,
+                    peak_force=peak,
+                    peak_pressure=pressure,
+                )
+            )
+
+
+@numba.njit(cache=True)
+def _contact_motion(rows, normals, x, v, w, r, m, inertia, com, velocity, omega):
+    """Per event e, granule i = rows[e, 0] on polygon k = rows[e, 1] with the outward normal
+    n = normals[e]: the normal and tangential velocity (m/s) of the granule's contact point
+    p = x_i − r_i n relative to the polygon's material point there (its centre of mass com[k],
+    velocity and ω; t = n turned +90°), p (m), and the granule's kinetic energy ½m|v|² + ½Iw²
+    (J), as rows (vn, vt, p_x, p_y, energy). Each operation as the formula is written, one at
+    a time (no fast-math)."""
+    out = np.empty((rows.shape[0], 5))
+    for e in range(rows.shape[0]):
+        i, k = rows[e, 0], rows[e, 1]
+        nx, ny = normals[e, 0], normals[e, 1]
+        px = x[i, 0] - r[i] * nx
+        py = x[i, 1] - r[i] * ny
+        tx, ty = -ny, nx
+        rel_x = v[i, 0] - w[i] * r[i] * tx - (velocity[k, 0] - omega[k] * (py - com[k, 1]))
+        rel_y = v[i, 1] - w[i] * r[i] * ty - (velocity[k, 1] + omega[k] * (px - com[k, 0]))
+        out[e, 0] = rel_x * nx + rel_y * ny
+        out[e, 1] = rel_x * tx + rel_y * ty
+        out[e, 2] = px
+        out[e, 3] = py
+        speed2 = v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1]
+        out[e, 4] = 0.5 * m[i] * speed2 + 0.5 * inertia[i] * w[i] * w[i]
+    return out
 
 
 @numba.njit(cache=True)
