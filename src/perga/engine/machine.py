@@ -129,7 +129,7 @@ class Machine:
 
     def state(self) -> MachineState:
         """The machine's bodies now (:class:`MachineState`), one compiled read of their structs."""
-        addresses = self._addresses()
+        addresses = self.body_addresses()
         table = np.empty((len(addresses), 6))
         _read_bodies(addresses, self._cogs, table)
         return MachineState(table)
@@ -137,11 +137,13 @@ class Machine:
     def set_loads(self, loads: FloatArray) -> None:
         """Set the force and torque of every body of :attr:`bodies` for the next step from
         ``loads`` (k, 3): fx, fy, torque, internal units, written raw into their structs."""
-        _write_loads(self._addresses(), loads)
+        write_loads(self.body_addresses(), loads)
 
-    def _addresses(self) -> NDArray[np.uint64]:
-        """The addresses of the raw views of :attr:`bodies` (made at first use, when the space
-        is complete), with their centres of gravity."""
+    def body_addresses(self) -> NDArray[np.uint64]:
+        """The addresses of the raw structs of :attr:`bodies` (made at first use, when the
+        space is complete, with their centres of gravity; made again after unpickling: take
+        them at each use), for compiled code that reads them or sets their loads
+        (:func:`write_loads`)."""
         if self._raw is None:
             bodies = self.bodies
             self._raw = BodyViews(bodies)
@@ -231,7 +233,7 @@ def _read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArra
 
 
 @numba.njit(cache=True)
-def _write_loads(addresses: NDArray[np.uint64], loads: FloatArray) -> None:
+def write_loads(addresses: NDArray[np.uint64], loads: FloatArray) -> None:
     """Body j's force and torque (the f and t of its struct at ``addresses[j]``) from
     ``loads[j]`` = (fx, fy, torque)."""
     for j in range(addresses.size):

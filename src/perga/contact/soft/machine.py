@@ -29,7 +29,7 @@ import numpy as np
 
 from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
 from perga.engine import units as u
-from perga.engine.machine import Machine, MachineState
+from perga.engine.machine import Machine, MachineState, write_loads
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 
@@ -115,7 +115,7 @@ class MachinePolygons:
         """Each hammer polygon's pivot in the rotor frame, m ((0, 0) unless hinged)."""
         self._loads = np.zeros((len(machine.bodies), 3))
         """Force and torque on each machine body, internal units (:meth:`apply_loads`)."""
-        self._set_loads = machine.set_loads
+        self._body_addresses = machine.body_addresses
         self.polygons: PolygonSet = polygon_set(
             relative,
             np.array([p.mean(axis=0) for p in relative]),
@@ -150,11 +150,10 @@ class MachinePolygons:
         torque for the next Pymunk step; returns the mean moment about the axis on the hammers
         the rotor drives, N·m."""
         p = self.polygons
-        moment = _sum_loads(
-            p.force, p.torque, p.moment, self._polygon_rows, self.machine, self._loads
-        )
-        self._set_loads(self._loads)
-        return moment
+        return _apply_loads(
+            p.force, p.torque, p.moment, self._polygon_rows, self.machine, self._loads,
+            self._body_addresses(),
+        )  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -199,17 +198,19 @@ def _pose(
 
 
 @numba.njit(cache=True)
-def _sum_loads(
+def _apply_loads(
     force: np.ndarray,
     torque: np.ndarray,
     moment: np.ndarray,
     polygon_rows: np.ndarray,
     driven: np.ndarray,
     out: np.ndarray,
+    bodies: np.ndarray,
 ) -> float:
     """Sum the hammer polygons' mean loads (SI) onto their bodies' rows of ``out`` (k, 3:
-    force x, y and torque, internal units); returns the mean moment about the axis of the
-    polygons the rotor drives (``driven``, all polygons), N·m."""
+    force x, y and torque, internal units) and write them into the bodies' structs at the
+    addresses ``bodies`` (``Machine.body_addresses``); returns the mean moment about the axis
+    of the polygons the rotor drives (``driven``, all polygons), N·m."""
     out[:] = 0.0
     for i in range(polygon_rows.size):
         k = polygon_rows[i]
@@ -220,6 +221,7 @@ def _sum_loads(
         out[k, 0] /= FORCE
         out[k, 1] /= FORCE
         out[k, 2] /= TORQUE
+    write_loads(bodies, out)
     total = 0.0
     for i in range(driven.size):
         if driven[i]:
