@@ -39,8 +39,16 @@ def _impact(granule: int, v_n: float) -> Impact:
         tangential_velocity_after=0.0, normal_impulse=M * 1.5 * v_n, point=(0.0, 0.0),
         normal=(1.0, 0.0), granule_energy_gain=0.0, dissipated=0.0, hammer_energy_before=0.0,
         granule_velocity_before=(0.0, 0.0), hammer_swing_angle_before=0.0,
-        hammer_angular_velocity_before=0.0, specific_energy=0.5 * v_n**2,
+        hammer_angular_velocity_before=0.0,
     )  # fmt: skip
+
+
+def test_an_impact_carries_its_specific_energy() -> None:
+    """W = ½v_n² of the approach (J/kg) from the record's own normal velocity, exactly, unless
+    the maker gives it."""
+    assert _impact(0, 3.0).specific_energy == 0.5 * 3.0**2
+    given = Impact(**{**_impact(0, 3.0).__dict__, "specific_energy": 1.25})
+    assert given.specific_energy == 1.25
 
 
 def test_breakage_probability_and_survival_are_the_master_curve() -> None:

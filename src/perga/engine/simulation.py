@@ -28,9 +28,10 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
    effects' losses (hinge friction, swing stops) from the two states
    (:mod:`perga.engine.energy`).
 7. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
-8. The process, if the system has one (:mod:`perga.engine.process`): the step's new impacts
-   get their specific energy (and with damage their breakage); broken granules to be removed
-   are removed, granules at the outlet leave, the feed puts in what is due.
+8. The process, if the system has one (:mod:`perga.engine.process`): with damage the step's
+   new impacts get their breakage (each carries its specific energy from its making);
+   broken granules to be removed are removed, granules at the outlet leave, the feed puts in
+   what is due.
 
 Because positions move before velocities are updated (step 4), the state after a step is
 (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler, first
@@ -41,7 +42,6 @@ and the hammers they load form one kick-drift scheme (docs/architecture.md).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -140,7 +140,6 @@ class Simulation:
             self._seen += len(new)
             sizes = dict(zip(*self._ids_and_sizes(), strict=True)) if self.damage else {}
             for impact in new:
-                impact = replace(impact, specific_energy=0.5 * impact.normal_velocity_before**2)
                 if self.damage is not None:
                     impact = self.damage.annotate(impact, sizes.get(impact.granule, math.nan))
                 self.impacts.append(impact)

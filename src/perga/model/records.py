@@ -58,7 +58,7 @@ class Impact:
     hammer_swing_angle_before: float
     hammer_angular_velocity_before: float
     specific_energy: float = math.nan
-    """W = ½v_n² of the approach, J/kg (the simulation fills it in)."""
+    """W = ½v_n² of the approach, J/kg (from ``normal_velocity_before`` unless given)."""
     breakage_probability: float = math.nan
     """The chance this impact broke the granule, 1 − exp(−f_mat·x·(W − W_min)⁺), with damage."""
     survival: float = math.nan
@@ -68,6 +68,10 @@ class Impact:
     peak_pressure: float = math.nan
     """Hertz's peak contact pressure at ``peak_force``, p0 = (2E*/π)·√(δ/R), Pa (soft Hertz
     contacts; a diagnostic of damage)."""
+
+    def __post_init__(self) -> None:
+        if math.isnan(self.specific_energy):
+            object.__setattr__(self, "specific_energy", 0.5 * self.normal_velocity_before**2)
 
 
 @dataclass(frozen=True)
