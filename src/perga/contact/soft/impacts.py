@@ -17,8 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
@@ -32,15 +31,16 @@ from perga.contact.soft.polygon_set import (
     HIST_PEAK_FORCE,
     LINEAR,
 )
-from perga.geometry.disc_polygon import closest_feature
+from perga.geometry.disc_polygon import FASTMATH, closest_feature
 from perga.model.records import HammerState, Impact
 
 if TYPE_CHECKING:
     from perga.engine.machine import MachineState
 
 
-@dataclass(frozen=True)
-class _Start:
+class _Start(NamedTuple):
+    """An open impact's values at its start (:meth:`SoftImpactLog._start`)."""
+
     time: float
     normal: tuple[float, float]
     hammer_angle: float
@@ -151,27 +151,24 @@ class SoftImpactLog:
         """Start an impact for each (granule row, polygon) of ``opened``: the granule's state
         and the polygon's pose before the call, the hammer's state now."""
         g, p = self._g, self._g.polygons
-        normals = []
-        for i, k in opened:
-            d, nx, ny = closest_feature(
-                self._x[i, 0], self._x[i, 1], self._vertices, p.start, p.solid, p.corner, k
-            )
-            if not math.isfinite(d):  # before the call the centre faced another piece's feature
-                _, nx, ny = closest_feature(g.x[i, 0], g.x[i, 1], *p.outline(), k)
-            normals.append((float(nx), float(ny)))
         rows = np.array(opened, dtype=np.int64).reshape(-1, 2)
+        normals = _start_normals(
+            rows, self._x, self._vertices, g.x, p.vertices, p.start, p.solid, p.corner
+        )
         motion = _contact_motion(
-            rows, np.array(normals).reshape(-1, 2), self._x, self._v, self._w, g.r, g.m,
-            g.inertia, self._com, p.velocity, p.omega,
+            rows, normals, self._x, self._v, self._w, g.r, g.m, g.inertia, self._com,
+            p.velocity, p.omega,
         ).tolist()  # fmt: skip
         hammers: dict[int, HammerState] = {}
-        for (i, k), n, (vn, vt, px, py, energy) in zip(opened, normals, motion, strict=True):
+        for (i, k), (nx, ny), (vn, vt, px, py, energy) in zip(
+            opened, normals.tolist(), motion, strict=True
+        ):
             hammer = int(self._hammer_of[k])
             if hammer not in hammers:
                 hammers[hammer] = self._hammer_state(hammer)
             self._open[(int(ids[i]), k)] = _Start(
                 time=time,
-                normal=n,
+                normal=(nx, ny),
                 hammer_angle=angles[hammer],
                 normal_velocity=vn,
                 tangential_velocity=vt,
@@ -236,6 +233,25 @@ class SoftImpactLog:
                     peak_pressure=pressure,
                 )
             )
+
+
+@numba.njit(cache=True, fastmath=FASTMATH)
+def _start_normals(rows, x_before, vertices_before, x, vertices, start, solid, corner):
+    """The outward normal of each contact (granule rows[e, 0], polygon rows[e, 1]) at its
+    start, (n, 2): from the closest feature of the polygon to the granule's centre before the
+    kernel call, or, where that centre faced no feature of this piece (it faced another
+    piece's), after it (``closest_feature``, compiled with its own flags)."""
+    out = np.empty((rows.shape[0], 2))
+    for e in range(rows.shape[0]):
+        i, k = rows[e, 0], rows[e, 1]
+        d, nx, ny = closest_feature(
+            x_before[i, 0], x_before[i, 1], vertices_before, start, solid, corner, k
+        )
+        if not math.isfinite(d):
+            _, nx, ny = closest_feature(x[i, 0], x[i, 1], vertices, start, solid, corner, k)
+        out[e, 0] = nx
+        out[e, 1] = ny
+    return out
 
 
 @numba.njit(cache=True)
