@@ -163,3 +163,42 @@ def test_granules_added_and_removed_keep_the_chunks(request):
     assert one.hist.any()  # granules in contact, with tangential springs
     for name in ("x", "v", "w", "f", "tq", "dissipated"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name), err_msg=name)
+
+
+def test_a_block_that_holds_the_count_spares_the_kernel_the_question(monkeypatch, request):
+    """Inside ``numba_threads(n)`` a kernel call on n threads takes the count as held (numba is
+    not asked); outside a block, or inside one that holds another count, it asks and runs on
+    its own count all the same; after a block the outer count is held again."""
+    held = numba.get_num_threads()
+    request.addfinalizer(lambda: numba.set_num_threads(held))
+    asked, running = [], []
+    get, advance = numba.get_num_threads, SoftGranules._bundles
+
+    def counting():
+        asked.append(1)
+        return get()
+
+    def seen(self, *args):
+        running.append(numba.get_num_threads.__wrapped__())
+        return advance(self, *args)
+
+    counting.__wrapped__ = get
+    monkeypatch.setattr(numba, "get_num_threads", counting)
+    monkeypatch.setattr(SoftGranules, "_bundles", seen)
+    row = contact_parameters("linear", 0.6, k_n=2e4)
+    g = SoftGranules(np.array([[0.0, 0.0], [0.005, 0.0]]), np.full(2, 2e-3), np.full(2, 1e-4),
+                     uniform_table(row), walls=[chamber(0.02)], threads=1)  # fmt: skip
+    with t.numba_threads(1):
+        asked.clear()
+        g.step(1)
+        assert asked == [] and running == [1]
+        with t.numba_threads(2):
+            asked.clear()
+            g.step(1)
+            assert asked == [1] and running == [1, 1]
+        asked.clear()
+        g.step(1)
+        assert asked == [] and running == [1, 1, 1] and t.held_threads() == 1
+    asked.clear()
+    g.step(1)
+    assert asked == [1] and t.held_threads() is None

@@ -28,6 +28,7 @@ from perga.contact.soft.polygon_set import (
     check_materials,
     no_polygons,
 )
+from perga.contact.soft.threads import held_threads
 from perga.geometry.disc_polygon import bounding_radii, closest_feature
 
 DEFAULT_DT_FRACTION = 1.0 / 50.0
@@ -382,7 +383,8 @@ class SoftGranules:
         polys, table = self._poly
         if self.polygon_hist.shape != (self.n, polys.n_poly, HIST_COLUMNS):
             raise ValueError("polygon_hist does not match the granules and polygons")
-        previous = numba.get_num_threads()
+        held = held_threads() == self.threads  # a run's block holds the count: no need to ask
+        previous = self.threads if held else numba.get_num_threads()
         switch = previous != self.threads  # set_num_threads costs time (docs/performance.md)
         if switch:
             numba.set_num_threads(self.threads)

@@ -43,17 +43,32 @@ def kernel_threads(chunks: int, free: int) -> int:
     return max(1, min(chunks, free, numba.get_num_threads()))
 
 
+_held: int | None = None
+"""The thread count the innermost ``numba_threads`` block holds (None outside one)."""
+
+
 @contextmanager
 def numba_threads(threads: int) -> Iterator[None]:
     """Run the block's compiled parallel loops on ``threads`` threads, then restore the count.
     Everything parallel a soft run calls goes through here or ``SoftGranules.step``: a parallel
     loop on a second thread that has no free core waits for one (a 300-granule frame's energy
-    took 5.5-8 ms instead of 0.37 ms on a loaded machine, docs/performance.md)."""
+    took 5.5-8 ms instead of 0.37 ms on a loaded machine, docs/performance.md). Inside the
+    block ``held_threads()`` is ``threads``: a kernel call that needs that count then takes it
+    as set, without asking numba (2.5 µs a call in a run, docs/performance.md)."""
+    global _held
     previous = numba.get_num_threads()
+    outer = _held
     if previous != threads:
         numba.set_num_threads(threads)
+    _held = threads
     try:
         yield
     finally:
+        _held = outer
         if previous != threads:
             numba.set_num_threads(previous)
+
+
+def held_threads() -> int | None:
+    """The thread count the innermost ``numba_threads`` block holds, None outside one."""
+    return _held
