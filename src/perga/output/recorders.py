@@ -136,19 +136,26 @@ SPLIT = {
 """Vector fields of the records and their columns."""
 
 
+def record_fields(record: type, omit: frozenset[str] = frozenset()) -> tuple[str, ...]:
+    """A record class's field names but ``omit``, in order."""
+    return tuple(f.name for f in fields(record) if f.name not in omit)
+
+
 def record_columns(record: type, omit: frozenset[str] = frozenset()) -> tuple[str, ...]:
     """A record class's fields but ``omit`` as columns, vectors split into components
     (``SPLIT``)."""
-    names = (f.name for f in fields(record) if f.name not in omit)
-    return tuple(c for name in names for c in SPLIT.get(name, (name,)))
+    return tuple(c for name in record_fields(record, omit) for c in SPLIT.get(name, (name,)))
 
 
-def record_row(record: object, omit: frozenset[str] = frozenset()) -> tuple[object, ...]:
-    """One record's values in the order of ``record_columns``; booleans as 0/1."""
-    names = (f.name for f in fields(record) if f.name not in omit)  # type: ignore[arg-type]
-    values = (getattr(record, name) for name in names)
-    flat = (c for v in values for c in (v if isinstance(v, tuple) else (v,)))
-    return tuple(int(c) if isinstance(c, bool) else c for c in flat)
+def record_row(record: object, names: tuple[str, ...]) -> list[object]:
+    """One record's values of the fields ``names`` (``record_fields``), in the order of
+    ``record_columns``: vectors split, booleans as 0/1."""
+    row: list[object] = []
+    for name in names:
+        value = getattr(record, name)
+        for c in value if isinstance(value, tuple) else (value,):
+            row.append(int(c) if isinstance(c, bool) else c)
+    return row
 
 
 class EventRecorder(TableRecorder):
@@ -161,6 +168,7 @@ class EventRecorder(TableRecorder):
 
     def __init__(self, directory: Path, spec: SceneSpec) -> None:
         self.omit = self.omitted(spec)
+        self.names = record_fields(self.record_type, self.omit)
         self.table = Table(directory / self.file, record_columns(self.record_type, self.omit))
         self.written = 0
 
@@ -172,7 +180,7 @@ class EventRecorder(TableRecorder):
     def record(self, frame: Frame, events: Events) -> None:
         """Append the events recorded since the last call."""
         new: Sequence[object] = getattr(events, self.kind)[self.written :]
-        self.table.write(record_row(e, self.omit) for e in new)
+        self.table.write(record_row(e, self.names) for e in new)
         self.written += len(new)
 
 
