@@ -170,9 +170,11 @@ class SoftContacts:
         step, internal units."""
         if self.log is not None:
             self.log.after(time, machine, self._hammer_rows)
+        if not self._bonds:
+            return self._moment
         g = self.granules
         released = int(g.counts[COUNT_RELEASES])
-        if not self._bonds or released == self._released:
+        if released == self._released:
             return self._moment
         self._released = released
         new = np.flatnonzero((g.released_step >= 0) & ~self._reported)
