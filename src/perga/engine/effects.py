@@ -356,19 +356,12 @@ def _floor_kick(
 
 
 @numba.njit(fastmath=False, inline="always")
-def _floor_kicks(
-    v: FloatArray,
-    x: FloatArray,
-    m: FloatArray,
-    dv_max: float,
-    omega: float,
-    velocity_unit: float,
-    length_unit: float,
-) -> tuple[float, float]:
-    """:func:`_floor_kick` in two loops: the kicks, over flat views and with selects for the
-    granules at rest relative to the floor, which the compiler vectorises (IEEE division and
-    square root are exact per lane: the same floats as one granule at a time), then the sums
-    in granule order, to which a granule at rest adds −0.0 (x + (−0.0) is x for every x)."""
+def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
+    """:func:`_floor_kick` (its arguments and results) in two loops: the kicks, over flat
+    views and with selects for the granules at rest relative to the floor, which the compiler
+    vectorises (IEEE division and square root are exact per lane: the same floats as one
+    granule at a time), then the sums in granule order, to which a granule at rest adds −0.0
+    (x + (−0.0) is x for every x)."""
     n = v.shape[0]
     vf = v.reshape(-1)
     xf = x.reshape(-1)
