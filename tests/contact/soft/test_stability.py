@@ -1,6 +1,8 @@
 """Closed passive systems lose energy; dense overlapping packings are released gently; the
 neighbour list (rebuilds, history carry-over) and the thread count do not change the physics."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -112,6 +114,33 @@ def test_default_step_is_fiftieth_of_shortest_contact():
     t_c = contact_duration(g.params[0, 0], 0.5 * m_min, 0.5 * r_min, 0.0)
     assert g.t_c == pytest.approx(t_c, rel=1e-12)
     assert g.dt == pytest.approx(g.t_c / 50.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("x", "walls", "pairs", "dt", "refused"),
+    [([[0.0, 0.0]], [], True, None, True), ([[0.0, 0.0]], [], True, 1e-6, False),
+     ([[0.0, 0.0]], [chamber(R_CHAMBER)], True, None, False),
+     ([[-0.01, 0.0], [0.01, 0.0]], [], False, None, True),
+     ([[-0.01, 0.0], [0.01, 0.0]], [], True, None, False)],
+)  # fmt: skip
+def test_a_default_step_needs_a_contact_that_can_form(x, walls, pairs, dt, refused):
+    """The default step comes from the shortest contact duration: where no contact can form
+    (one granule, or pairs off, with no wall) it does not exist, and the system without dt is
+    refused naming what to give; with dt, a wall or a second granule it is made."""
+    n = len(x)
+
+    def make() -> SoftGranules:
+        table = uniform_table(contact_parameters("linear", 0.7, k_n=1e6))
+        return SoftGranules(x, [RADIUS] * n, [MASS] * n, table, walls=walls, pairs=pairs, dt=dt)
+
+    if refused:
+        with pytest.raises(ValueError, match=r"no contact can form.*give dt"):
+            make()
+        return
+    g = make()
+    assert math.isfinite(g.dt) and g.dt > 0.0
+    g.step(3)
+    assert np.isfinite(g.x).all()
 
 
 def test_without_pairs_granules_pass_through_each_other():

@@ -166,6 +166,12 @@ class SoftGranules:
         self.gravity = _f64(gravity, (2,))
         self.v_max = float(v_max)
         self.t_c = self.shortest_contact_duration()
+        if dt is None and not math.isfinite(self.t_c):
+            raise ValueError(
+                f"SoftGranules: no contact can form (granules: {n}; no second granule with pairs "
+                "on, no wall, no polygon), so there is no contact duration to take the step "
+                "from: give dt"
+            )
         self.dt = float(dt) if dt is not None else dt_fraction * self.t_c
         self._default_skin = skin is None
         self.skin = default_skin(self.r) if skin is None else float(skin)
@@ -204,7 +210,8 @@ class SoftGranules:
         return self.x.shape[0]
 
     def shortest_contact_duration(self) -> float:
-        """Shortest head-on contact duration over the material pairs present, s.
+        """Shortest head-on contact duration over the material pairs present, s (inf where no
+        contact can form).
 
         Granule pairs (that can form: with ``pairs``, two granules at least) use the two
         smallest masses and radii of their materials (m_eff grows with both masses; a Hertz
@@ -230,7 +237,7 @@ class SoftGranules:
             for s in range(self.walls.shape[0]):
                 row = self.params[a, int(self.walls[s, 5])]
                 durations.append(contact_duration(row, m_min[int(a)], r_min[int(a)], self.v_max))
-        return min(durations + self._polygon_durations())
+        return min(durations + self._polygon_durations(), default=math.inf)
 
     def _polygon_durations(self) -> list[float]:
         """Shortest head-on granule-polygon contact duration per polygon, s.
