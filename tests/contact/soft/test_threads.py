@@ -4,6 +4,7 @@ what a run used in its summary."""
 from __future__ import annotations
 
 import json
+import threading
 from dataclasses import replace
 from pathlib import Path
 
@@ -202,3 +203,17 @@ def test_a_block_that_holds_the_count_spares_the_kernel_the_question(monkeypatch
     asked.clear()
     g.step(1)
     assert asked == [1] and t.held_threads() is None
+
+
+def test_a_held_count_is_the_holding_threads_alone(request):
+    """numba's count is per Python thread, and so is the count a block holds: another Python
+    thread (a threaded Dask worker's next task) sees none and asks numba for its own."""
+    held = numba.get_num_threads()
+    request.addfinalizer(lambda: numba.set_num_threads(held))
+    seen = []
+    with t.numba_threads(1):
+        other = threading.Thread(target=lambda: seen.append(t.held_threads()))
+        other.start()
+        other.join()
+        assert t.held_threads() == 1
+    assert seen == [None]

@@ -17,6 +17,7 @@ second thread that has no free core to run on makes a step many times slower
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -43,8 +44,9 @@ def kernel_threads(chunks: int, free: int) -> int:
     return max(1, min(chunks, free, numba.get_num_threads()))
 
 
-_held: int | None = None
-"""The thread count the innermost ``numba_threads`` block holds (None outside one)."""
+_local = threading.local()
+"""Per Python thread, as numba's own count: ``held``, the count the innermost
+``numba_threads`` block of this thread holds."""
 
 
 @contextmanager
@@ -55,20 +57,20 @@ def numba_threads(threads: int) -> Iterator[None]:
     took 5.5-8 ms instead of 0.37 ms on a loaded machine, docs/performance.md). Inside the
     block ``held_threads()`` is ``threads``: a kernel call that needs that count then takes it
     as set, without asking numba (2.5 µs a call in a run, docs/performance.md)."""
-    global _held
     previous = numba.get_num_threads()
-    outer = _held
+    outer = held_threads()
     if previous != threads:
         numba.set_num_threads(threads)
-    _held = threads
+    _local.held = threads
     try:
         yield
     finally:
-        _held = outer
+        _local.held = outer
         if previous != threads:
             numba.set_num_threads(previous)
 
 
 def held_threads() -> int | None:
-    """The thread count the innermost ``numba_threads`` block holds, None outside one."""
-    return _held
+    """The thread count the innermost ``numba_threads`` block of this Python thread holds
+    (numba's count is per thread too), None outside one."""
+    return getattr(_local, "held", None)
