@@ -110,6 +110,7 @@ class Machine:
     hinges: list[pymunk.PivotJoint]
     effects: list[Effect] = field(default_factory=list)
     _raw: BodyViews | None = field(default=None, repr=False)
+    _hammer_rows: NDArray[np.int64] | None = field(default=None, repr=False)
     _cogs: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
 
     @property
@@ -125,7 +126,10 @@ class Machine:
     @property
     def hammer_rows(self) -> NDArray[np.int64]:
         """Each hammer's row in a :class:`MachineState` (0, the rotor, for a welded one)."""
-        return np.array([self.row_of(b) for b in self.hammer_bodies], dtype=np.int64)
+        if self._hammer_rows is None:
+            rows = [self.row_of(b) for b in self.hammer_bodies]
+            self._hammer_rows = np.array(rows, dtype=np.int64)
+        return self._hammer_rows
 
     def state(self) -> MachineState:
         """The machine's bodies now (:class:`MachineState`), one compiled read of their structs."""
@@ -155,9 +159,23 @@ class Machine:
         """Whether the rotor is a dynamic body held at ω by a motor (the drive effect)."""
         return self.rotor.body_type == pymunk.Body.DYNAMIC
 
-    def hammer_state(self, index: int) -> HammerState:
-        """The :class:`HammerState` of hammer ``index`` now."""
+    def hammer_state(self, index: int, state: MachineState | None = None) -> HammerState:
+        """The :class:`HammerState` of hammer ``index`` now; ``state``, the machine's state now
+        if it has been read, gives a hinged hammer's without asking pymunk: its velocity at the
+        centre of gravity is its body's v, the same floats (``tests/engine/
+        test_machine_state.py``)."""
         spec = self.spec.hammers[index]
+        if state is not None and spec.mount == "hinged":
+            row = state.table[self.hammer_rows[index]]
+            vx, vy = row[3] * u.VELOCITY, row[4] * u.VELOCITY
+            spin = row[5] * u.ANGULAR_VELOCITY
+            return HammerState(
+                energy=float(
+                    0.5 * spec.mass * (vx**2 + vy**2) + 0.5 * spec.moment_about_centre * spin**2
+                ),
+                swing_angle=float(row[2] - state.table[0, 2] - spec.angle_on_rotor),
+                angular_velocity=float(spin),
+            )
         body = self.hammer_bodies[index]
         welded = body is self.rotor
         centre = (

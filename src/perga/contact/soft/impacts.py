@@ -72,14 +72,15 @@ class SoftImpactLog:
     """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
     of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
     its own); call :meth:`before` before and :meth:`after` after every kernel call, and
-    :meth:`rows_changed` when granules are added or removed. ``hammer_state(h)`` gives hammer
-    h's :class:`~perga.model.records.HammerState` now, ``ids()`` the id of each granule row."""
+    :meth:`rows_changed` when granules are added or removed. ``hammer_state(h, machine)`` gives
+    hammer h's :class:`~perga.model.records.HammerState` now (``machine``: the machine's state
+    now), ``ids()`` the id of each granule row."""
 
     def __init__(
         self,
         granules: SoftGranules,
         hammer_of: np.ndarray,
-        hammer_state: Callable[[int], HammerState],
+        hammer_state: Callable[[int, MachineState], HammerState],
         ids: Callable[[], np.ndarray],
     ) -> None:
         self.impacts: list[Impact] = []
@@ -143,13 +144,18 @@ class SoftImpactLog:
         if closed:
             self._close(closed, ids, angles)
         if opened:
-            self._start(opened, ids, time, angles)
+            self._start(opened, ids, time, angles, machine)
 
     def _start(
-        self, opened: list[tuple[int, int]], ids: np.ndarray, time: float, angles: list[float]
+        self,
+        opened: list[tuple[int, int]],
+        ids: np.ndarray,
+        time: float,
+        angles: list[float],
+        machine: MachineState,
     ) -> None:
         """Start an impact for each (granule row, polygon) of ``opened``: the granule's state
-        and the polygon's pose before the call, the hammer's state now."""
+        and the polygon's pose before the call, the hammer's state now (``machine``)."""
         g, p = self._g, self._g.polygons
         rows = np.array(opened, dtype=np.int64).reshape(-1, 2)
         normals = _start_normals(
@@ -165,7 +171,7 @@ class SoftImpactLog:
         ):
             hammer = int(self._hammer_of[k])
             if hammer not in hammers:
-                hammers[hammer] = self._hammer_state(hammer)
+                hammers[hammer] = self._hammer_state(hammer, machine)
             self._open[(int(ids[i]), k)] = _Start(
                 time=time,
                 normal=(nx, ny),
