@@ -154,11 +154,11 @@ def test_the_chipmunk_step_carries_no_python_callback() -> None:
         assert c.pre_solve is None and c.post_solve is None
 
 
-def test_a_hinged_hammers_state_from_the_read_state_is_pymunks() -> None:
-    """A hammer's state taken from the machine's read state (hinged hammers; the others ask
-    pymunk either way) equals the one from its pymunk body, the same floats, at every one of
-    40 instants of a driven rotor under gravity with a hammer on its stops (pymunk's velocity at
-    the centre of gravity is the body's own v)."""
+def test_a_hammers_state_from_the_read_state_is_pymunks() -> None:
+    """A hammer's state taken from the machine's read state (hinged and free hammers; a welded
+    one asks pymunk either way) equals the one from its pymunk body, the same floats, at every
+    one of 40 instants of a driven rotor under gravity with a hammer on its stops (pymunk's
+    velocity at the centre of gravity is the body's own v)."""
     sim = _sim(EffectsSpec(drive=DriveSpec(inertia=0.01, torque_limit=0.1)), (0.0, -9.80665))
     machine = sim.machine
     for _ in range(40):

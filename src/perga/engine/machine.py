@@ -127,8 +127,9 @@ class Machine:
     def hammer_rows(self) -> NDArray[np.int64]:
         """Each hammer's row in a :class:`MachineState` (0, the rotor, for a welded one)."""
         if self._hammer_rows is None:
-            rows = [self.row_of(b) for b in self.hammer_bodies]
-            self._hammer_rows = np.array(rows, dtype=np.int64)
+            rows = np.array([self.row_of(b) for b in self.hammer_bodies], dtype=np.int64)
+            rows.setflags(write=False)  # made once and shared: no caller may change it
+            self._hammer_rows = rows
         return self._hammer_rows
 
     def state(self) -> MachineState:
@@ -161,11 +162,13 @@ class Machine:
 
     def hammer_state(self, index: int, state: MachineState | None = None) -> HammerState:
         """The :class:`HammerState` of hammer ``index`` now; ``state``, the machine's state now
-        if it has been read, gives a hinged hammer's without asking pymunk: its velocity at the
-        centre of gravity is its body's v, the same floats (``tests/engine/
-        test_machine_state.py``)."""
+        if it has been read, gives that of a hammer with a body of its own (hinged or free)
+        without asking pymunk: its velocity at the centre of gravity is its body's v, the same
+        floats (``tests/engine/test_machine_state.py``)."""
         spec = self.spec.hammers[index]
-        if state is not None and spec.mount == "hinged":
+        body = self.hammer_bodies[index]
+        welded = body is self.rotor
+        if state is not None and not welded:
             row = state.table[self.hammer_rows[index]]
             vx, vy = row[3] * u.VELOCITY, row[4] * u.VELOCITY
             spin = row[5] * u.ANGULAR_VELOCITY
@@ -176,8 +179,6 @@ class Machine:
                 swing_angle=float(row[2] - state.table[0, 2] - spec.angle_on_rotor),
                 angular_velocity=float(spin),
             )
-        body = self.hammer_bodies[index]
-        welded = body is self.rotor
         centre = (
             self._welded_centre(spec) if welded else body.local_to_world(body.center_of_gravity)
         )
