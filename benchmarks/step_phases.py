@@ -3,9 +3,11 @@
 timed, over ``--steps`` steps after ``--start`` s of the case, one thread. Before timing, the
 script checks on a second build that its copy of the order moves the simulation exactly as
 ``Simulation.step`` does (bit-identical granule positions after 200 steps), so the phases are
-those of the real step. Compiled code first needed inside the timed window (the impact log's
-scan runs only after a step that opened or closed a contact) compiles there on the first run
-after numba's cache was cleared: run it twice after changing compiled code.
+those of the real step (the kernel's phase includes the floor-friction kick and the impact
+log's copy of the state, which the kernel call makes first). Compiled code first needed inside
+the timed window (the impact log's scan runs only after a step that opened or closed a contact)
+compiles there on the first run after numba's cache was cleared: run it twice after changing
+compiled code.
 
     python benchmarks/step_phases.py                                 # the soft separator
     python benchmarks/step_phases.py cases/separator.toml --start 0.15
@@ -44,9 +46,9 @@ def phased_step(sim: Simulation, timers: dict[str, float]) -> None:
     before = timed("machine reads", sim.machine.state)
     if hasattr(c, "polygons"):  # soft: the parts of before_machine_step
         timed("pose", c.polygons.pose, c.granule_dt, before)
-        if c.log is not None:
-            timed("impact log", c.log.before)
-        timed("kernel", c.granules.step, c.substeps)
+        kept = None if c.log is None else timed("impact log", c.log.kept)
+        floor = None if c.floor is None else (c.floor, before.table[0, 5])
+        timed("kernel", lambda: c.granules.step(c.substeps, floor=floor, kept=kept))
         moment = timed("loads", c.polygons.apply_loads)
         c._moment = moment * c._machine_dt / ANGULAR_IMPULSE
     else:

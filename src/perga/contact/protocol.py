@@ -6,9 +6,11 @@ machine (:data:`perga.contact.MODELS` names them) and attaches to it whatever it
 bodies and collision handlers, or arrays and a compiled kernel). Per machine step the
 simulation calls, in this order (:mod:`perga.engine.simulation` has the whole step order):
 
-1. the effects' kicks on :attr:`ContactModel.kinematics`;
+1. the effects' kicks on :attr:`ContactModel.kinematics` (but one the model took over,
+   :meth:`GranuleKinematics.take_floor_kick`);
 2. :meth:`ContactModel.before_machine_step`, with the machine's state
-   (:class:`~perga.engine.machine.MachineState`, internal units);
+   (:class:`~perga.engine.machine.MachineState`, internal units), which applies a kick it took
+   over first;
 3. Chipmunk's step of the space;
 4. :meth:`ContactModel.after_machine_step`, with the state after it, which returns the angular
    impulse about the axis that the contacts put on the rotor-driven bodies (for the drive's
@@ -36,6 +38,7 @@ from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
 if TYPE_CHECKING:
+    from perga.engine.effects import FloorKick
     from perga.engine.machine import MachineState
 
 FloatArray = NDArray[np.float64]
@@ -63,6 +66,12 @@ class GranuleKinematics(Protocol):
 
     def write_velocities(self, velocities: FloatArray) -> None:
         """Set every granule's velocity from ``velocities`` (n, 2), as :meth:`read` gave them."""
+        ...
+
+    def take_floor_kick(self, kick: FloorKick) -> bool:
+        """Whether the model takes floor friction's kick over: it then applies ``kick`` at the
+        start of :meth:`ContactModel.before_machine_step`, with the rotor's angular velocity of
+        the state it is given, instead of the effects' runner before it."""
         ...
 
 

@@ -10,8 +10,11 @@ the contact model moves anything (:meth:`~perga.engine.simulation.Simulation.ste
 from the contact model (the soft kernel's own arrays, or one batch read of the rigid bodies),
 every listed kick changes the velocity array in place in registry order, each a velocity
 change over dt that never reverses the velocity it opposes, and one write sets them (none for
-the kernel's arrays). A kick computes in Chipmunk's internal units whatever units the arrays
-are in, dividing by their unit on the way in and multiplying on the way out. Effects that are
+the kernel's arrays). A contact model may take the last kick over and apply it itself, after
+the others and before it moves anything: the soft kernel applies floor friction
+(:class:`FloorKick`) at the start of its call, the same compiled loop on the same arrays. A
+kick computes in Chipmunk's internal units whatever units the arrays are in, dividing by their
+unit on the way in and multiplying on the way out. Effects that are
 constraints (hinge friction, drive) are pymunk motors.
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
@@ -62,18 +65,19 @@ class Effect:
     term: ClassVar[Term]
 
     def __init__(self) -> None:
-        self._removed = 0.0
-        self._supplied = 0.0
+        self._energy = np.zeros(2)
+        """Removed and supplied so far, internal energy units: an array, so that a contact model
+        applying this effect's kick in its own compiled step can add to it (:class:`FloorKick`)."""
 
     @property
     def removed(self) -> float:
         """Energy this effect has taken out of the bodies since t = 0, J (>= 0)."""
-        return self._removed * u.ENERGY
+        return float(self._energy[0]) * u.ENERGY
 
     @property
     def supplied(self) -> float:
         """Work the rotor has done on the bodies through this effect since t = 0, J."""
-        return self._supplied * u.ENERGY
+        return float(self._energy[1]) * u.ENERGY
 
 
 class Kick(Effect):
@@ -91,13 +95,23 @@ class Kick(Effect):
         if :attr:`needs_positions`."""
         raise NotImplementedError
 
+    def hand_over(self, granules: GranuleKinematics, dt: float) -> bool:
+        """Whether the contact model of ``granules`` takes this kick over, to apply it itself
+        at the start of each machine step of ``dt`` (internal time units); none does but
+        :class:`FloorFriction`'s."""
+        return False
+
 
 class KickRunner:
     """Runs the kicks among ``effects`` on the granules of a contact model: one read, each kick
-    in registry order, one write (internal units)."""
+    in registry order, one write (internal units). The last kick, if the contact model takes it
+    over (:meth:`Kick.hand_over`; machine steps of ``dt``, internal time units), is the model's
+    to apply after the others, at the start of its own work in the step, and not run here."""
 
-    def __init__(self, effects: list[Effect], granules: GranuleKinematics) -> None:
+    def __init__(self, effects: list[Effect], granules: GranuleKinematics, dt: float) -> None:
         self.kicks = [e for e in effects if isinstance(e, Kick)]
+        if self.kicks and self.kicks[-1].hand_over(granules, dt):
+            self.kicks.pop()
         self.granules = granules
         self._positions = any(k.needs_positions for k in self.kicks)
 
@@ -121,6 +135,18 @@ class KickRunner:
         for effect in self.kicks:
             effect.kick(granules, dt)
         self.granules.write_velocities(granules.velocities)
+
+
+class FloorKick(NamedTuple):
+    """:class:`FloorFriction`'s kick as a contact model applies it (:meth:`Kick.hand_over`): at
+    the start of each machine step, ``floor_kick`` on its granules with ``dv_max`` (internal
+    velocity units) and the rotor's angular velocity at the step's start if ``corotating``
+    (else 0, the granules' velocities standing for their positions, as :class:`KickRunner`
+    gives them), adding what it returns to ``energy`` (the effect's counters, in place)."""
+
+    dv_max: float
+    corotating: bool
+    energy: FloatArray
 
 
 class Granules(NamedTuple):
@@ -211,8 +237,8 @@ class ConstraintLosses(Effect):
             rows = [(a, b) for _, a, b in self._watched]
             self._rows = np.array(rows, dtype=np.int64).reshape(-1, 2)
         if self._rows.size:
-            self._removed = _constraint_losses(
-                self._removed, self._impulses.addresses(), self._rows, before.table, after.table
+            self._energy[0] = _constraint_losses(
+                self._energy[0], self._impulses.addresses(), self._rows, before.table, after.table
             )
 
 
@@ -277,12 +303,16 @@ class FloorFriction(Kick):
         g = granules
         omega = 0.0 if self._rotor is None else self._rotor.angular_velocity
         where = g.velocities if g.positions is None else g.positions  # unused without a rotor
-        removed, supplied = _floor_kick(
+        removed, supplied = floor_kick(
             g.velocities, where, g.masses, self._deceleration * dt, omega, g.velocity_unit,
             g.length_unit,
         )  # fmt: skip
-        self._removed += removed
-        self._supplied += supplied
+        self._energy[0] += removed
+        self._energy[1] += supplied
+
+    def hand_over(self, granules: GranuleKinematics, dt: float) -> bool:
+        kick = FloorKick(self._deceleration * dt, self._rotor is not None, self._energy)
+        return granules.take_floor_kick(kick)
 
 
 @_register
@@ -309,7 +339,7 @@ class AirDrag(Kick):
             * s.thickness
             / granules.masses
         ) / (1.0 / u.LENGTH)
-        self._removed += _drag_kick(
+        self._energy[0] += _drag_kick(
             granules.velocities, k * dt, granules.masses, granules.velocity_unit
         )
 
@@ -336,7 +366,7 @@ def _constraint_losses(
 
 
 @numba.njit(cache=True, fastmath=False)
-def _floor_kick(
+def floor_kick(
     v: FloatArray,
     x: FloatArray,
     m: FloatArray,
@@ -357,7 +387,7 @@ def _floor_kick(
 
 @numba.njit(fastmath=False, inline="always")
 def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
-    """:func:`_floor_kick` (its arguments and results) in two loops: the kicks, over flat
+    """:func:`floor_kick` (its arguments and results) in two loops: the kicks, over flat
     views and with selects for the granules at rest relative to the floor, which the compiler
     vectorises (IEEE division and square root are exact per lane: the same floats as one
     granule at a time), then the sums in granule order, to which a granule at rest adds −0.0
@@ -399,7 +429,7 @@ def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: fl
     units whose internal one is ``velocity_unit``, everything else and the result in internal
     units)."""
     removed = 0.0
-    scaled = velocity_unit != 1.0  # as in _floor_kick
+    scaled = velocity_unit != 1.0  # as in floor_kick
     for i in range(v.shape[0]):
         vx = v[i, 0] / velocity_unit if scaled else v[i, 0]
         vy = v[i, 1] / velocity_unit if scaled else v[i, 1]

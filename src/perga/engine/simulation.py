@@ -7,7 +7,8 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
 
 1. Kicks: only if the spec lists them, floor friction and air drag change all granules'
    velocities at once from (x_n, v_n) (:mod:`perga.engine.effects`): an operator split before
-   everything else, so the contacts and the drift see the kicked velocities.
+   everything else, so the contacts and the drift see the kicked velocities. A contact model
+   that takes floor friction over (the soft one) applies it first thing in 2 instead.
 2. The machine's state is read (:meth:`~perga.engine.machine.Machine.state`: rotor and hammer
    bodies, read raw from their structs), and handed to the contact model's work before the
    machine moves (:meth:`~perga.contact.protocol.ContactModel.before_machine_step`): rigid,
@@ -83,7 +84,7 @@ class Simulation:
         self.contacts: ContactModel = model(
             self.machine, record_impacts=record_impacts, track_energy=track_energy
         )
-        kicks = KickRunner(self.machine.effects, self.contacts.kinematics())
+        kicks = KickRunner(self.machine.effects, self.contacts.kinematics(), self._dt_internal)
         self.kicks = kicks if kicks else None
         """The effects' kicks on the granules (None when the spec lists none)."""
         self.meter = EnergyMeter(self.machine) if track_energy else None

@@ -37,6 +37,7 @@ from perga.contact.rigid.outline import OutlineFilter
 from perga.contact.rigid.wall_bounce import wall_bounce
 from perga.engine import units as u
 from perga.engine.batch import BodyReader, BodyWriter
+from perga.engine.effects import FloorKick
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
@@ -61,6 +62,9 @@ class _Kinematics:
 
     def write_velocities(self, velocities: FloatArray) -> None:
         self._model.writer().write_internal_velocities(velocities)
+
+    def take_floor_kick(self, kick: FloorKick) -> bool:
+        return False  # the runner's batch read and write serve the bodies
 
 
 class RigidContacts:

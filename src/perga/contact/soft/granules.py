@@ -1,7 +1,10 @@
 """``SoftGranules``: the arrays and parameters of a soft-granule system, stepped by the kernel."""
 
+from __future__ import annotations
+
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numba
 import numpy as np
@@ -29,7 +32,11 @@ from perga.contact.soft.polygon_set import (
     no_polygons,
 )
 from perga.contact.soft.threads import held_threads
+from perga.engine import units as u
 from perga.geometry.disc_polygon import bounding_radii, closest_feature
+
+if TYPE_CHECKING:
+    from perga.engine.effects import FloorKick
 
 DEFAULT_DT_FRACTION = 1.0 / 50.0
 """Default step as a fraction of the shortest contact duration (MercuryDPM convention)."""
@@ -47,6 +54,32 @@ def plane(point: tuple[float, float], normal: tuple[float, float], mat: int = 0)
     if not norm > 0.0:
         raise ValueError("normal must be non-zero")
     return np.array([kernel.WALL_PLANE, point[0], point[1], nx / norm, ny / norm, mat], dtype=float)
+
+
+_NO_KICK = np.zeros(0)
+_NOTHING_KEPT = (
+    np.zeros((0, 2)),
+    np.zeros((0, 2)),
+    np.zeros(0),
+    np.zeros((0, 2)),
+    np.zeros((0, 2)),
+)
+
+
+def _opening(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ...] | None) -> tuple:
+    """``kernel.Opening`` as a plain tuple (``SoftGranules._bundles``) for ``SoftGranules.step``'s
+    floor and kept."""
+    kick, omega = (None, 0.0) if floor is None else floor
+    return (
+        0.0 if kick is None else kick.dv_max,
+        float(omega) if kick is not None and kick.corotating else 0.0,
+        u.VELOCITY,
+        u.LENGTH,
+        kick is not None and kick.corotating,
+        _NO_KICK if kick is None else kick.energy,
+        kept is not None,
+        _NOTHING_KEPT if kept is None else kept,
+    )
 
 
 def _held(a, n: int) -> np.ndarray:
@@ -375,8 +408,21 @@ class SoftGranules:
         """Force a neighbour-list rebuild at the next step (after editing x or r by hand)."""
         self._rebuild = True
 
-    def step(self, n_steps: int = 1, *, drag: float = 0.0, v_cap: float = math.inf) -> None:
+    def step(
+        self,
+        n_steps: int = 1,
+        *,
+        drag: float = 0.0,
+        v_cap: float = math.inf,
+        floor: tuple[FloorKick, float] | None = None,
+        kept: tuple[np.ndarray, ...] | None = None,
+    ) -> None:
         """Advance n_steps steps of dt inside one compiled kernel call (threads as configured).
+
+        First, in the same call (``kernel.Opening``): ``floor`` = (kick, ω), the floor-friction
+        kick the effects handed over (``perga.engine.effects.FloorKick``) with the rotor's
+        angular velocity ω (internal units), applied to every granule; then the granules' x, v,
+        w and the polygons' vertices and com copied into ``kept`` (arrays of their shapes).
 
         Polygons, if any, move rigidly from their current pose at their current velocities
         during the call (the PINNED pivot with them); afterwards they hold the pose n_steps·dt
@@ -400,7 +446,8 @@ class SoftGranules:
             advance = kernel.advance_threaded if threaded else kernel.advance
             coast = self.coasting and self._coast_wait == 0 and n_steps > 1
             self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists, coasted = advance(
-                *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap), coast)
+                *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap), coast),
+                _opening(floor, kept),
             )
         finally:
             if switch:

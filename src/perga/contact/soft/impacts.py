@@ -100,13 +100,14 @@ class SoftImpactLog:
         self._vertices = granules.polygons.vertices.copy()
         self._com = granules.polygons.com.copy()
 
-    def before(self) -> None:
-        """Keep the granules' and polygons' state before a kernel call (starts need it)."""
-        g, p = self._g, self._g.polygons
+    def kept(self) -> tuple[np.ndarray, ...]:
+        """The arrays into which the next kernel call copies the granules' x, v, w and the
+        polygons' vertices and com at its start (``kernel.Opening``; starts need them), of
+        their shapes."""
+        g = self._g
         if self._x.shape != g.x.shape:
             self._x, self._v, self._w = np.empty_like(g.x), np.empty_like(g.v), np.empty_like(g.w)
-        _keep(g.x, g.v, g.w, p.vertices, p.com, self._x, self._v, self._w, self._vertices,
-              self._com)  # fmt: skip
+        return self._x, self._v, self._w, self._vertices, self._com
 
     def rows_changed(self, keep: np.ndarray, added: int) -> None:
         """Granule rows were removed (``keep``: the old rows that stay) and ``added`` appended:
@@ -284,27 +285,6 @@ def _contact_motion(rows, normals, x, v, w, r, m, inertia, com, velocity, omega)
         speed2 = v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1]
         out[e, 4] = 0.5 * m[i] * speed2 + 0.5 * inertia[i] * w[i] * w[i]
     return out
-
-
-@numba.njit(cache=True)
-def _keep(x, v, w, vertices, com, x_out, v_out, w_out, vertices_out, com_out):
-    """Copy the granules' and polygons' state into the log's arrays of the same shapes."""
-    _copy(x, x_out)
-    _copy(v, v_out)
-    _copy(w, w_out)
-    _copy(vertices, vertices_out)
-    _copy(com, com_out)
-
-
-@numba.njit(cache=True)
-def _copy(source, target):
-    """Copy the C-contiguous array ``source`` into ``target`` of its shape, as one flat loop
-    (numba's ``target[:] = source`` of a 2-D array indexes every element: slower,
-    docs/performance.md)."""
-    a = source.reshape(-1)
-    b = target.reshape(-1)
-    for k in range(a.size):
-        b[k] = a[k]
 
 
 @numba.njit(cache=True)

@@ -19,7 +19,10 @@ which numba compiles as tuples with attribute access):
 * ``Work``: the per-chunk force accumulator acc (n_chunks, n, 3), the contact forces f (n, 2)
   and torques tq (n,) of the last step, the dissipated energies (3,) and the event counts (2,);
 * ``Settings``: n_steps, dt (s), gravity (2,) m/s², skin (m), drag (1/s), v_cap (m/s), pairs,
-  rebuild, first_step (the count of steps before the call).
+  rebuild, first_step (the count of steps before the call);
+* ``Opening``: what a call does before its first step: the floor-friction kick the effects
+  handed over (``perga.engine.effects.FloorKick``) and the copy of the state after it that the
+  impact log keeps (``perga.contact.soft.impacts``), each optional.
 
 Bonds (the comb, ``perga.model.process``): a held granule stays where it is, at rest, while the
 force its bond must take, |f + m g| (f the contact force of the step, g gravity), is at most its
@@ -125,6 +128,7 @@ from perga.contact.soft.polygon_forces import (
 )
 from perga.contact.soft.polygon_set import HIST_ACTIVE, PolygonArrays, PolygonLoads, TableArrays
 from perga.contact.soft.stepping import add_pair_forces, kick_drift_one, motion_of
+from perga.engine.effects import floor_kick
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
@@ -255,6 +259,24 @@ class Settings(NamedTuple):
     rebuild: bool
     first_step: int
     coast: bool
+
+
+class Opening(NamedTuple):
+    """What a call does before its first step. The floor-friction kick if energy has two
+    entries (``perga.engine.effects.floor_kick`` on the granules, dv_max and omega in internal
+    units, velocity_unit and length_unit the internal units in SI; corotating False: the
+    velocities stand for the positions, as the effects' runner gives them), its removed and
+    supplied energy added to energy in place; then, if keep, the granules' x, v, w and the
+    polygons' vertices and com copied into kept (arrays of their shapes)."""
+
+    dv_max: float
+    omega: float
+    velocity_unit: float
+    length_unit: float
+    corotating: bool
+    energy: np.ndarray
+    keep: bool
+    kept: tuple
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -769,7 +791,7 @@ def _motion(x, v, a_prev, x_ref, dt):
 
 
 @njit(cache=True)
-def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
+def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening):
     """Advance settings.n_steps symplectic Euler steps on one thread; returns (start, nbr, hist,
     n_rebuilds, cand_start, cand_polygon, n_lists, coasted): the neighbour list after the call,
     the number of rebuilds, the polygon candidate list after the call (``CandidateList``'s start
@@ -781,8 +803,10 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     its class and field names on every call, which costs more than the kernel on small systems
     (docs/performance.md), so ``SoftGranules.step`` passes plain tuples.
 
-    work.acc must hold zeros, as ``new_accumulator`` makes it: the pair pass adds into it and
-    the per-granule pass zeroes each row after reading it (one pass over it fewer a step).
+    Before its first step the call does what opening (``Opening``) asks: the floor kick, then
+    the copy of the state. work.acc must hold zeros, as ``new_accumulator`` makes it: the pair
+    pass adds into it and the per-granule pass zeroes each row after reading it (one pass over
+    it fewer a step).
     settings.pairs False skips granule-granule contacts (no pair list built, no pair loop).
 
     Rebuilds the neighbour list (carrying the tangential history over) before a step when
@@ -801,23 +825,25 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     have been added to.
     """
     return _advance(
-        settings, granules, props, bonds, params, walls, polygons, nbrs, work,
+        settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening,
         _pair_forces_serial, _integrate_serial,
     )  # fmt: skip
 
 
 @njit(cache=True)
-def advance_threaded(settings, granules, props, bonds, params, walls, polygons, nbrs, work):
+def advance_threaded(
+    settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening
+):  # fmt: skip
     """``advance`` with the chunks of work.acc computed on numba's threads."""
     return _advance(
-        settings, granules, props, bonds, params, walls, polygons, nbrs, work, pair_forces,
-        _integrate,
+        settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening,
+        pair_forces, _integrate,
     )  # fmt: skip
 
 
 @njit(inline="always")
 def _advance(
-    settings, granules, props, bonds, params, walls, polygons, nbrs, work, pair_pass,
+    settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening, pair_pass,
     integrate_pass,
 ):  # fmt: skip
     """The body of ``advance`` with its pair pass (``pair_forces`` or ``_pair_forces_serial``)
@@ -838,6 +864,7 @@ def _advance(
     )
     nbrs = NeighbourList(*nbrs)
     work = Work(*work)
+    _open(granules, props.m, polygons.arrays, Opening(*opening))
     x, v, r = granules.x, granules.v, props.r
     n_steps, dt, skin, pairs = settings.n_steps, settings.dt, settings.skin, settings.pairs
     start, nbr, hist, x_ref = nbrs.start, nbrs.nbr, nbrs.hist, nbrs.x_ref
@@ -968,6 +995,38 @@ def _advance(
         torque /= n_steps
         moment /= n_steps
     return start, nbr, hist, n_rebuilds, cstart, cpoly, n_lists, coasted
+
+
+@njit(cache=True)
+def _open(granules, m, poly, opening):
+    """Opening's work (``Opening``) on granules (``Granules``) of masses m (n,), kg, and the
+    polygons poly (``PolygonArrays``)."""
+    if opening.energy.shape[0] == 2:
+        where = granules.x if opening.corotating else granules.v
+        removed, supplied = floor_kick(
+            granules.v, where, m, opening.dv_max, opening.omega, opening.velocity_unit,
+            opening.length_unit,
+        )  # fmt: skip
+        opening.energy[0] += removed
+        opening.energy[1] += supplied
+    if opening.keep:
+        x, v, w, vertices, com = opening.kept
+        _copy(granules.x, x)
+        _copy(granules.v, v)
+        _copy(granules.w, w)
+        _copy(poly.vertices, vertices)
+        _copy(poly.com, com)
+
+
+@njit(cache=True, inline="always")
+def _copy(source, target):
+    """Copy the C-contiguous array ``source`` into ``target`` of its shape, as one flat loop
+    (numba's ``target[:] = source`` of a 2-D array indexes every element: slower,
+    docs/performance.md)."""
+    a = source.reshape(-1)
+    b = target.reshape(-1)
+    for k in range(a.size):
+        b[k] = a[k]
 
 
 def new_accumulator(n_chunks: int, n: int) -> np.ndarray:

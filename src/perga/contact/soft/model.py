@@ -7,7 +7,9 @@ Per machine step (``machine_dt`` = k granule steps; the whole order is in
 
 * before Chipmunk's step: each hammer is posed one granule step ahead along its current motion
   (:mod:`perga.contact.soft.machine` explains why); the kernel takes k granule steps in one
-  compiled call (:mod:`perga.contact.soft.kernel`): pair, wall and hammer contacts, kick-drift;
+  compiled call (:mod:`perga.contact.soft.kernel`), which first applies floor friction (the
+  effects hand its kick over: :class:`~perga.engine.effects.FloorKick`) and keeps the state
+  after it for the impact log: pair, wall and hammer contacts, kick-drift;
   hammers move rigidly with their current velocities during the call and the mean load on
   each becomes its body's force and torque for Chipmunk's step;
 * after it: the impact log opens and closes granule-hammer impacts
@@ -31,13 +33,13 @@ import numpy as np
 
 from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.soft.build import granule_table_materials, soft_granules
-from perga.contact.soft.granules import SoftGranules
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.kernel import COUNT_RELEASES
 from perga.contact.soft.machine import MachinePolygons
 from perga.contact.soft.threads import RECHECK, kernel_chunks, kernel_threads, numba_threads
 from perga.cores import CoreMonitor
 from perga.engine import units as u
+from perga.engine.effects import FloorKick
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
@@ -47,10 +49,12 @@ ANGULAR_IMPULSE = u.FORCE * u.LENGTH * u.TIME
 
 
 class _Kinematics:
-    """The soft granules' velocities for the kicks: the kernel's own arrays, SI."""
+    """The soft granules' velocities for the kicks: the kernel's own arrays, SI; floor friction
+    taken over by ``model`` (applied in its kernel call)."""
 
-    def __init__(self, granules: SoftGranules) -> None:
-        self._g = granules
+    def __init__(self, model: SoftContacts) -> None:
+        self._model = model
+        self._g = model.granules
 
     @property
     def count(self) -> int:
@@ -65,6 +69,10 @@ class _Kinematics:
     def write_velocities(self, velocities: FloatArray) -> None:
         if velocities is not self._g.v:
             self._g.v[:] = velocities
+
+    def take_floor_kick(self, kick: FloorKick) -> bool:
+        self._model.floor = kick
+        return True
 
 
 class SoftContacts:
@@ -121,6 +129,9 @@ class SoftContacts:
         self._gone = LedgerTerms()
         self._inflow = 0.0
         self._moment = 0.0
+        self.floor: FloorKick | None = None
+        """Floor friction's kick, once the effects' runner has handed it over
+        (:meth:`_Kinematics.take_floor_kick`): the kernel call applies it first."""
 
     @property
     def impacts(self) -> list[Impact]:
@@ -139,17 +150,20 @@ class SoftContacts:
 
     def kinematics(self) -> _Kinematics:
         """The granules' velocities and positions for the kicks: the kernel's arrays, SI."""
-        return _Kinematics(self.granules)
+        return _Kinematics(self)
 
     def before_machine_step(self, time: float, machine: MachineState) -> None:
-        """Pose the hammers from ``machine``, take the granule steps, load the hammer bodies
-        (module doc)."""
+        """Pose the hammers from ``machine``, take the granule steps (floor friction first, if
+        handed over, with the rotor's ω of ``machine``), load the hammer bodies (module doc)."""
         self.polygons.pose(self.granule_dt, machine)
-        if self.log is not None:
-            self.log.before()
         if self._cores is not None:
             self._follow_free_cores()
-        self.granules.step(self.substeps)
+        floor = self.floor
+        self.granules.step(
+            self.substeps,
+            floor=None if floor is None else (floor, machine.table[0, 5]),  # row 0: the rotor
+            kept=None if self.log is None else self.log.kept(),
+        )
         moment = self.polygons.apply_loads()
         self._moment = moment * self._machine_dt / ANGULAR_IMPULSE
 
