@@ -237,8 +237,8 @@ class ConstraintLosses(Effect):
             rows = [(a, b) for _, a, b in self._watched]
             self._rows = np.array(rows, dtype=np.int64).reshape(-1, 2)
         if self._rows.size:
-            self._energy[0] = _constraint_losses(
-                self._energy[0], self._impulses.addresses(), self._rows, before.table, after.table
+            _constraint_losses(
+                self._energy, self._impulses.addresses(), self._rows, before.table, after.table
             )
 
 
@@ -303,12 +303,10 @@ class FloorFriction(Kick):
         g = granules
         omega = 0.0 if self._rotor is None else self._rotor.angular_velocity
         where = g.velocities if g.positions is None else g.positions  # unused without a rotor
-        removed, supplied = floor_kick(
+        floor_kick(
             g.velocities, where, g.masses, self._deceleration * dt, omega, g.velocity_unit,
-            g.length_unit,
+            g.length_unit, self._energy,
         )  # fmt: skip
-        self._energy[0] += removed
-        self._energy[1] += supplied
 
     def hand_over(self, granules: GranuleKinematics, dt: float) -> bool:
         kick = FloorKick(self._deceleration * dt, self._rotor is not None, self._energy)
@@ -339,30 +337,32 @@ class AirDrag(Kick):
             * s.thickness
             / granules.masses
         ) / (1.0 / u.LENGTH)
-        self._energy[0] += _drag_kick(
-            granules.velocities, k * dt, granules.masses, granules.velocity_unit
+        _drag_kick(
+            granules.velocities, k * dt, granules.masses, granules.velocity_unit, self._energy
         )
 
 
 @numba.njit(cache=True, fastmath=False)
 def _constraint_losses(
-    removed: float,
+    energy: FloatArray,
     impulses: NDArray[np.uint64],
     rows: np.ndarray,
     before: np.ndarray,
     after: np.ndarray,
-) -> float:
-    """``removed`` less j·ω̄_rel for each constraint (:meth:`ConstraintLosses.account`): angular
+) -> None:
+    """Take j·ω̄_rel from the removed energy ``energy[0]`` for each constraint
+    (:meth:`ConstraintLosses.account`): angular
     impulse j (its jAcc, the double at the address ``impulses[c]``, :meth:`~perga.engine.
     chipmunk_state.JointImpulses.addresses`) on body ``rows[c, 1]`` against ``rows[c, 0]``,
     ω̄_rel the mean of their relative angular velocity at the step's start and end (column 5
     of the machine-state tables ``before`` and ``after``), in turn."""
+    removed = energy[0]
     for c in range(rows.shape[0]):
         a = rows[c, 0]
         b = rows[c, 1]
         rel = (before[b, 5] - before[a, 5]) + (after[b, 5] - after[a, 5])
         removed -= doubles_at(impulses[c], 1)[0] * (0.5 * rel)
-    return removed
+    energy[0] = removed
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -374,24 +374,28 @@ def floor_kick(
     omega: float,
     velocity_unit: float,
     length_unit: float,
-) -> tuple[float, float]:
+    energy: FloatArray,
+) -> None:
     """Floor friction on every granule in place (:class:`FloorFriction`): the velocity relative
     to the floor (ω × x; ω = 0 for a stationary floor) loses at most ``dv_max`` of its length;
-    returns the energy removed and the floor's work, Σ over granules (masses ``m`` in kg, ``v``
-    and ``x`` (n, 2), C-contiguous, in the units whose internal ones are ``velocity_unit`` and
-    ``length_unit``, everything else and the results in internal units)."""
+    the energy removed and the floor's work, Σ over granules, are added to ``energy`` (2,)
+    (masses ``m`` in kg, ``v`` and ``x`` (n, 2), C-contiguous, in the units whose internal ones
+    are ``velocity_unit`` and ``length_unit``, everything else in internal units)."""
     if velocity_unit == 1.0:  # a unit of 1 inlined: its divisions fold away (x / 1 is x)
-        return _floor_kicks(v, x, m, dv_max, omega, 1.0, length_unit)
-    return _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit)
+        removed, supplied = _floor_kicks(v, x, m, dv_max, omega, 1.0, length_unit)
+    else:
+        removed, supplied = _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit)
+    energy[0] += removed
+    energy[1] += supplied
 
 
 @numba.njit(fastmath=False, inline="always")
 def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
-    """:func:`floor_kick` (its arguments and results) in two loops: the kicks, over flat
-    views and with selects for the granules at rest relative to the floor, which the compiler
-    vectorises (IEEE division and square root are exact per lane: the same floats as one
-    granule at a time), then the sums in granule order, to which a granule at rest adds −0.0
-    (x + (−0.0) is x for every x)."""
+    """:func:`floor_kick` (its arguments but energy; returns the two sums) in two loops: the
+    kicks, over flat views and with selects for the granules at rest relative to the floor,
+    which the compiler vectorises (IEEE division and square root are exact per lane: the same
+    floats as one granule at a time), then the sums in granule order, to which a granule at
+    rest adds −0.0 (x + (−0.0) is x for every x)."""
     n = v.shape[0]
     vf = v.reshape(-1)
     xf = x.reshape(-1)
@@ -423,10 +427,12 @@ def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
 
 
 @numba.njit(cache=True, fastmath=False)
-def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: float) -> float:
+def _drag_kick(
+    v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: float, energy: FloatArray
+) -> None:
     """Quadratic drag on every granule in place (:class:`AirDrag`): |v'| = |v|/(1 + k|v|dt),
-    ``k_dt`` = k·dt per granule; returns the energy removed (masses ``m`` in kg, ``v`` in the
-    units whose internal one is ``velocity_unit``, everything else and the result in internal
+    ``k_dt`` = k·dt per granule; adds the energy removed to ``energy[0]`` (masses ``m`` in kg,
+    ``v`` in the units whose internal one is ``velocity_unit``, everything else in internal
     units)."""
     removed = 0.0
     scaled = velocity_unit != 1.0  # as in floor_kick
@@ -440,7 +446,7 @@ def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: fl
             v[i, 0] = (vx * ratio) * velocity_unit if scaled else vx * ratio
             v[i, 1] = (vy * ratio) * velocity_unit if scaled else vy * ratio
             removed += 0.5 * (m[i] / MASS) * (speed * speed - after * after)
-    return removed
+    energy[0] += removed
 
 
 def build_effects(machine: Machine) -> list[Effect]:

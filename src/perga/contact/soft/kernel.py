@@ -1003,12 +1003,10 @@ def _open(granules, m, poly, opening):
     polygons poly (``PolygonArrays``)."""
     if opening.energy.shape[0] == 2:
         where = granules.x if opening.corotating else granules.v
-        removed, supplied = floor_kick(
+        floor_kick(
             granules.v, where, m, opening.dv_max, opening.omega, opening.velocity_unit,
-            opening.length_unit,
+            opening.length_unit, opening.energy,
         )  # fmt: skip
-        opening.energy[0] += removed
-        opening.energy[1] += supplied
     if opening.keep:
         x, v, w, vertices, com = opening.kept
         _copy(granules.x, x)
