@@ -14,8 +14,8 @@ the kernel's arrays). A contact model may take the last kick over and apply it i
 the others and before it moves anything: the soft kernel applies floor friction
 (:class:`FloorKick`) at the start of its call, the same compiled loop on the same arrays. A
 kick computes in Chipmunk's internal units whatever units the arrays are in, dividing by their
-unit on the way in and multiplying on the way out. Effects that are
-constraints (hinge friction, drive) are pymunk motors.
+unit on the way in and multiplying on the way out. Effects that are constraints (hinge
+friction, drive) are pymunk motors.
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
@@ -142,7 +142,8 @@ class FloorKick(NamedTuple):
     the start of each machine step, ``floor_kick`` on its granules with ``dv_max`` (internal
     velocity units) and the rotor's angular velocity at the step's start if ``corotating``
     (else 0, the granules' velocities standing for their positions, as :class:`KickRunner`
-    gives them), adding what it returns to ``energy`` (the effect's counters, in place)."""
+    gives them), which adds the energy it removed and the floor's work to ``energy`` (the
+    effect's counters, in place)."""
 
     dv_max: float
     corotating: bool
@@ -350,12 +351,12 @@ def _constraint_losses(
     before: np.ndarray,
     after: np.ndarray,
 ) -> None:
-    """Take j·ω̄_rel from the removed energy ``energy[0]`` for each constraint
-    (:meth:`ConstraintLosses.account`): angular
-    impulse j (its jAcc, the double at the address ``impulses[c]``, :meth:`~perga.engine.
-    chipmunk_state.JointImpulses.addresses`) on body ``rows[c, 1]`` against ``rows[c, 0]``,
-    ω̄_rel the mean of their relative angular velocity at the step's start and end (column 5
-    of the machine-state tables ``before`` and ``after``), in turn."""
+    """Take j·ω̄_rel from the removed energy ``energy[0]`` for each constraint in turn
+    (:meth:`ConstraintLosses.account`): angular impulse j (its jAcc, the double at the address
+    ``impulses[c]``, :meth:`~perga.engine.chipmunk_state.JointImpulses.addresses`) on body
+    ``rows[c, 1]`` against ``rows[c, 0]``, ω̄_rel the mean of their relative angular velocity
+    at the step's start and end (column 5 of the machine-state tables ``before`` and
+    ``after``)."""
     removed = energy[0]
     for c in range(rows.shape[0]):
         a = rows[c, 0]

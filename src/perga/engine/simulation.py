@@ -86,7 +86,8 @@ class Simulation:
         )
         kicks = KickRunner(self.machine.effects, self.contacts.kinematics(), self._dt_internal)
         self.kicks = kicks if kicks else None
-        """The effects' kicks on the granules (None when the spec lists none)."""
+        """The effects' kicks on the granules (None when the spec lists none, or the contact
+        model took the only one over)."""
         self.meter = EnergyMeter(self.machine) if track_energy else None
         process = spec.process
         self.feed = Feed(process.feed) if process.feed else None
