@@ -152,7 +152,7 @@ def test_body_views_are_made_again_after_pickling():
 
 @numba.njit
 def _write_torque(addresses, torque):
-    """Compiled code writing body 0's torque through its address (as ``Machine.set_loads``)."""
+    """Compiled code writing body 0's torque through its address (as ``machine.write_loads``)."""
     raw = chipmunk_state.doubles_at(addresses[0], chipmunk_state.VIEW_WIDTH)
     old = raw[chipmunk_state.VIEW_T]
     raw[chipmunk_state.VIEW_T] = torque

@@ -1,5 +1,5 @@
 """The machine's state read raw from the bodies' structs (Machine.state), the loads written
-back the same way (Machine.set_loads), and the constraint effects' losses booked from two
+back the same way (machine.write_loads), and the constraint effects' losses booked from two
 states instead of Chipmunk callbacks (effects.ConstraintLosses)."""
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from perga.engine import Simulation
 from perga.engine.batch import BodyReader
 from perga.engine.chipmunk_state import JointImpulses
 from perga.engine.effects import ConstraintLosses, HingeFriction, SwingStops
+from perga.engine.machine import write_loads
 from perga.model import DriveSpec, EffectsSpec, RotorSpec, SceneSpec
 
 from .helpers import plate
@@ -100,7 +101,7 @@ def test_loads_land_on_the_bodies_and_nowhere_else() -> None:
     sim.machine.space.add(stranger)
     stranger.force, stranger.torque = (7.0, 8.0), 9.0
     loads = np.arange(12.0).reshape(4, 3) + 1.0
-    sim.machine.set_loads(loads)
+    write_loads(sim.machine.body_addresses(), loads)
     for body, row in zip(sim.machine.bodies, loads, strict=True):
         assert (*body.force, body.torque) == tuple(row)
     assert (*stranger.force, stranger.torque) == (7.0, 8.0, 9.0)

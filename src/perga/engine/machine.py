@@ -139,11 +139,6 @@ class Machine:
         _read_bodies(addresses, self._cogs, table)
         return MachineState(table)
 
-    def set_loads(self, loads: FloatArray) -> None:
-        """Set the force and torque of every body of :attr:`bodies` for the next step from
-        ``loads`` (k, 3): fx, fy, torque, internal units, written raw into their structs."""
-        write_loads(self.body_addresses(), loads)
-
     def body_addresses(self) -> NDArray[np.uint64]:
         """The addresses of the raw structs of :attr:`bodies` (made at first use, when the
         space is complete, with their centres of gravity; made again after unpickling: take

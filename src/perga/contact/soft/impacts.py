@@ -71,10 +71,10 @@ def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
 class SoftImpactLog:
     """Impacts of ``granules`` on the hammers, polygon k of ``granules.polygons`` being a piece
     of hammer ``hammer_of[k]`` (−1: not a hammer; a contact with each piece is an impact of
-    its own); call :meth:`before` before and :meth:`after` after every kernel call, and
-    :meth:`rows_changed` when granules are added or removed. ``hammer_state(h, machine)`` gives
-    hammer h's :class:`~perga.model.records.HammerState` now (``machine``: the machine's state
-    now), ``ids()`` the id of each granule row."""
+    its own); hand :meth:`kept` to every kernel call (it copies the start state there), call
+    :meth:`after` after it, and :meth:`rows_changed` when granules are added or removed.
+    ``hammer_state(h, machine)`` gives hammer h's :class:`~perga.model.records.HammerState` now
+    (``machine``: the machine's state now), ``ids()`` the id of each granule row."""
 
     def __init__(
         self,
