@@ -46,7 +46,7 @@ from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
     from perga.contact.protocol import GranuleKinematics
-    from perga.engine.machine import Machine, MachineState
+    from perga.engine.machine import Machine
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
@@ -211,7 +211,7 @@ class ConstraintLosses(Effect):
     pair of bodies).
 
     No Chipmunk callback: the energy meter hands the machine's states before and after the step
-    to :meth:`account` (:mod:`perga.engine.energy`), which equal what a constraint's
+    to :func:`constraint_losses` (:mod:`perga.engine.energy`), which equal what a constraint's
     ``pre_solve`` and ``post_solve`` see (Chipmunk integrates positions, then calls
     ``pre_solve`` before touching velocities, and ``post_solve`` after the last iteration);
     ``constraint.impulse`` read after the step is the step's impulse ``post_solve`` reads.
@@ -229,18 +229,16 @@ class ConstraintLosses(Effect):
         m = self._machine
         self._watched.append((constraint, m.row_of(constraint.a), m.row_of(constraint.b)))
 
-    def account(self, before: MachineState, after: MachineState) -> None:
-        """Add the step's losses (internal units) from the states at its start and end: −j·ω̄_rel
-        with j the constraint's signed angular impulse on b (read raw: pymunk gives only |j|),
-        so that work a constraint's position correction puts in counts as a negative loss."""
+    def losses(self) -> tuple[FloatArray, NDArray[np.uint64], np.ndarray]:
+        """The arguments of :func:`constraint_losses` but the states: the removed and supplied
+        energy (internal units, added to in place), the watched constraints' jAcc addresses
+        (read raw: pymunk gives only |j|) and their bodies' rows in a :class:`MachineState`
+        (made again when a constraint is watched, and after a checkpoint is read back)."""
         if self._impulses is None or len(self._impulses.joints) != len(self._watched):
             self._impulses = JointImpulses([c for c, _, _ in self._watched])
             rows = [(a, b) for _, a, b in self._watched]
             self._rows = np.array(rows, dtype=np.int64).reshape(-1, 2)
-        if self._rows.size:
-            _constraint_losses(
-                self._energy, self._impulses.addresses(), self._rows, before.table, after.table
-            )
+        return self._energy, self._impulses.addresses(), self._rows
 
 
 @_register
@@ -344,7 +342,7 @@ class AirDrag(Kick):
 
 
 @numba.njit(cache=True, fastmath=False)
-def _constraint_losses(
+def constraint_losses(
     energy: FloatArray,
     impulses: NDArray[np.uint64],
     rows: np.ndarray,
@@ -352,7 +350,8 @@ def _constraint_losses(
     after: np.ndarray,
 ) -> None:
     """Take j·ω̄_rel from the removed energy ``energy[0]`` for each constraint in turn
-    (:meth:`ConstraintLosses.account`): angular impulse j (its jAcc, the double at the address
+    (:class:`ConstraintLosses`, whose :meth:`~ConstraintLosses.losses` gives the arguments
+    but the machine-state tables): angular impulse j (its jAcc, the double at the address
     ``impulses[c]``, :meth:`~perga.engine.chipmunk_state.JointImpulses.addresses`) on body
     ``rows[c, 1]`` against ``rows[c, 0]``, ω̄_rel the mean of their relative angular velocity
     at the step's start and end (column 5 of the machine-state tables ``before`` and

@@ -51,10 +51,12 @@ The terms:
   residual itself (J) is kept beside it, so that a long run whose work done has grown large
   still shows its absolute error.
 
-Costs per step: one compiled call over the few rotor-driven bodies of the machine's states
-before and after the step (:meth:`~perga.engine.machine.Machine.state`, which the simulation
-also hands to the contact model) and the pins' impulses in place; one per constraint effect for
-its losses; a loop over all bodies only when :meth:`EnergyMeter.terms` is called.
+Costs per step: one compiled call (:func:`meter_step`: the constraint effects' losses, the
+pins' work and the balance over the few rotor-driven bodies) on the machine's states before and
+after the step (:meth:`~perga.engine.machine.Machine.state`, which the simulation also hands to
+the contact model) and the pins' impulses in place, made by the Python step or inside the
+compiled whole steps of a contact model; a loop over all bodies only when
+:meth:`EnergyMeter.terms` is called.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ import pymunk
 
 from perga.engine import units as u
 from perga.engine.chipmunk_state import JointImpulses, doubles_at
-from perga.engine.effects import ConstraintLosses, Drive
+from perga.engine.effects import ConstraintLosses, Drive, constraint_losses
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
 
@@ -109,7 +111,6 @@ class EnergyMeter:
         self._needs_balance = bool(balanced or machine.rotor.shapes)
         self._kinetics0 = [_kinetic(b) for b in self._bodies]
         self._centres0 = [_centre(b) for b in self._bodies]
-        self._drive = 0.0
         axis = [e.pivot for e in machine.effects if isinstance(e, Drive)]
         self._pins = JointImpulses([*machine.hinges, *axis])
         self._pin_rows = np.array(
@@ -123,7 +124,9 @@ class EnergyMeter:
         ).reshape(-1, 2)
         """Each pin's anchor on its body b from b's centre of gravity, b's frame (the static
         body's frame is the world's)."""
-        self._correction = 0.0
+        self._totals = np.zeros(2)
+        """The pins' work (joint correction) and the drive's work so far, internal units."""
+        self._gx, self._gy = self._gravity
         self._before: MachineState | None = None
 
     def before_step(self, state: MachineState) -> None:
@@ -138,20 +141,17 @@ class EnergyMeter:
         units; ``state`` the machine now."""
         before = self._before
         assert before is not None, "after_step without before_step"
-        for effect in self._constraints:
-            effect.account(before, state)
-        if not (self._pin_rows.size or self._needs_balance):
-            return
-        gx, gy = self._gravity
-        work, moment = _machine_terms(
-            before.table, state.table, self._pin_rows, self._pin_arms, self._pins.addresses(),
-            self._rows, self._mass, self._moment, gx * dt, gy * dt,
+        meter_step(self.compiled(dt), before.table, state.table, contact_moment)
+
+    def compiled(self, dt: float) -> tuple:
+        """The arguments of :func:`meter_step` but the states and the contacts' moment, for
+        steps of ``dt`` (internal time units)."""
+        losses = tuple(effect.losses() for effect in self._constraints) or _NO_LOSSES
+        return (
+            losses, self._pin_rows, self._pin_arms, self._pins.addresses(), self._rows,
+            self._mass, self._moment, self._gx * dt, self._gy * dt,
+            self._needs_balance or bool(self._pin_rows.size), self._needs_balance, self._totals,
         )  # fmt: skip
-        self._correction += work
-        if self._needs_balance:
-            self._drive += (
-                0.5 * (before.table[0, 5] + state.table[0, 5]) * (moment - contact_moment)
-            )
 
     def terms(self) -> LedgerTerms:
         """The cumulative terms of the machine's bodies and the effects now, in J."""
@@ -168,7 +168,7 @@ class EnergyMeter:
             moved=0.5
             * sum(abs(k - k0) for k, k0 in zip(kinetics, self._kinetics0, strict=True))
             * u.ENERGY,
-            drive_work=self._drive * u.ENERGY + supplied,
+            drive_work=float(self._totals[1]) * u.ENERGY + supplied,
             gravity_work=sum(
                 b.mass * gravity.dot(_centre(b) - r0)
                 for b, r0 in zip(self._bodies, self._centres0, strict=True)
@@ -177,8 +177,41 @@ class EnergyMeter:
             contact_dissipation=terms["contact"],
             friction=terms["friction"],
             drag=terms["drag"],
-            joint_correction=self._correction * u.ENERGY,
+            joint_correction=float(self._totals[0]) * u.ENERGY,
         )
+
+
+_NO_LOSSES = ((np.zeros(2), np.zeros(0, dtype=np.uint64), np.zeros((0, 2), dtype=np.int64)),)
+"""The constraint losses' arguments of a machine without constraint effects (one of none: the
+compiled meter takes a tuple of one type)."""
+
+IDLE_METER = (
+    _NO_LOSSES, np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2)), np.zeros(0, dtype=np.uint64),
+    np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), 0.0, 0.0, False, False, np.zeros(2),
+)  # fmt: skip
+""":meth:`EnergyMeter.compiled`'s arguments where no meter runs (compiled code that may meter
+takes a meter of this type; a run without one books nothing in it)."""
+
+
+@numba.njit(cache=True)
+def meter_step(meter: tuple, before: np.ndarray, after: np.ndarray, contact_moment: float) -> None:
+    """One step's terms (:meth:`EnergyMeter.after_step`) in compiled code, ``meter`` being
+    :meth:`EnergyMeter.compiled`'s: each constraint effect's losses
+    (:func:`~perga.engine.effects.constraint_losses`), then, where there are pins or a balance,
+    the pins' work and, with a balance, the drive's work added to the totals."""
+    losses, pin_rows, pin_arms, pins, rows, mass, moment, gx_dt, gy_dt, terms, balance, totals = (
+        meter
+    )
+    for energy, impulses, constraint_rows in losses:
+        constraint_losses(energy, impulses, constraint_rows, before, after)
+    if not terms:
+        return
+    work, change = _machine_terms(
+        before, after, pin_rows, pin_arms, pins, rows, mass, moment, gx_dt, gy_dt
+    )
+    totals[0] += work
+    if balance:
+        totals[1] += 0.5 * (before[0, 5] + after[0, 5]) * (change - contact_moment)
 
 
 @numba.njit(cache=True)
