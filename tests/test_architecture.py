@@ -169,14 +169,19 @@ def test_no_isinstance_on_a_simulation_or_contact_model() -> None:
 
 
 RAW_C_POINTERS = {
-    "perga.engine.chipmunk_state": {"_body", "_constraint"},
+    "perga.engine.chipmunk_state": {
+        "_body", "_constraint", "_space", "_handlers", "_add_later", "_remove_later",
+        "_post_step_callbacks", "_bodies_to_check",
+    },
     "perga.engine.batch": {"_space", "_float_arr", "_int_arr"},
-}
+}  # fmt: skip
 """The two exceptions, pymunk's C pointers, which pymunk offers no public way to reach: the module
 that reads what pymunk's pickle misses through the bodies' and joints' pointers (every read
-checked against pymunk's getters), and the batch reader, which calls pymunk.batch's C iterators
-with the space's pointer and reads the buffer's C arrays in place (2.6 µs less a fetch; its
-layout checked against the bodies' getters when it is built)."""
+checked against pymunk's getters) and steps the space from compiled code (``raw_space_step``:
+the space's pointer, and the work of pymunk's ``Space.step`` besides ``cpSpaceStep``, which
+must be none), and the batch reader, which calls pymunk.batch's C iterators with the space's
+pointer and reads the buffer's C arrays in place (2.6 µs less a fetch; its layout checked
+against the bodies' getters when it is built)."""
 
 
 def test_no_private_member_of_another_package_is_read() -> None:

@@ -171,3 +171,41 @@ def test_addresses_reach_the_struct_and_are_taken_again_after_pickling():
     copy_space, copy = pickle.loads(pickle.dumps((space, views)))
     assert _write_torque(copy.addresses(), 7.0) == 2.5
     assert hammer_of(copy_space).torque == 7.0 and body.torque == 2.5
+
+
+@numba.njit
+def _steps(function: int, space: int, dt: float, n: int) -> None:
+    for _ in range(n):
+        chipmunk_state.space_step(function, space, dt)
+
+
+def test_the_space_stepped_from_compiled_code_steps_as_pymunk_does() -> None:
+    """The hinged hammer stepped 200 times by ``cpSpaceStep`` from compiled code and by
+    ``Space.step``: the same floats in every body and joint."""
+    ours, theirs = hinged_hammer(), hinged_hammer()
+    raw = chipmunk_state.raw_space_step(ours)
+    assert raw is not None
+    _steps(*raw, 0.01, 200)
+    for _ in range(200):
+        theirs.step(0.01)
+    a, b = capture(ours), capture(theirs)
+    np.testing.assert_array_equal(a.bodies, b.bodies)
+    np.testing.assert_array_equal(a.joints, b.joints)
+
+
+def test_a_space_whose_step_has_python_work_is_not_stepped_raw() -> None:
+    """Bodies to check, objects waiting, a collision handler, a post-step callback: pymunk's
+    ``Space.step`` has work besides ``cpSpaceStep``, so no raw step is offered; a space with
+    none is."""
+    space = hinged_hammer()
+    assert chipmunk_state.raw_space_step(space) is not None
+    space.add(pymunk.Body(1.0, 1.0))
+    assert chipmunk_state.raw_space_step(space) is None  # a body added: checked at a step
+    space.step(0.01)
+    assert chipmunk_state.raw_space_step(space) is not None
+    space.add_post_step_callback(lambda space, key: None, "key")
+    assert chipmunk_state.raw_space_step(space) is None
+    space.step(0.01)
+    assert chipmunk_state.raw_space_step(space) is not None
+    space.on_collision(1, 2, begin=lambda arbiter, space, data: None)
+    assert chipmunk_state.raw_space_step(space) is None

@@ -48,6 +48,8 @@ from perga.engine.chipmunk_state import (
     VIEW_WIDTH,
     BodyViews,
     doubles_at,
+    raw_space_step,
+    space_step,
 )
 from perga.engine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
@@ -136,8 +138,19 @@ class Machine:
         """The machine's bodies now (:class:`MachineState`), one compiled read of their structs."""
         addresses = self.body_addresses()
         table = np.empty((len(addresses), 6))
-        _read_bodies(addresses, self._cogs, table)
+        read_bodies(addresses, self._cogs, table)
         return MachineState(table)
+
+    def raw_step(self, dt: float) -> tuple | None:
+        """The arguments of :func:`chipmunk_step` for steps of ``dt`` (internal time units):
+        (cpSpaceStep's address, the space's, dt, :meth:`body_addresses`, the bodies' centres of
+        gravity), or None while pymunk's ``Space.step`` has work of its own
+        (:func:`~perga.engine.chipmunk_state.raw_space_step`). Take them afresh for each run of
+        compiled steps: the addresses change with a checkpoint read back."""
+        addresses = raw_space_step(self.space)
+        if addresses is None:
+            return None
+        return (*addresses, float(dt), self.body_addresses(), self._cogs)
 
     def body_addresses(self) -> NDArray[np.uint64]:
         """The addresses of the raw structs of :attr:`bodies` (made at first use, when the
@@ -224,7 +237,7 @@ class Machine:
 
 
 @numba.njit(cache=True)
-def _read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArray) -> None:
+def read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArray) -> None:
     """Row j of ``out``: body j's centre of gravity in the world, angle, velocity and angular
     velocity from its raw struct at ``addresses[j]`` (:class:`MachineState`;
     :meth:`~perga.engine.chipmunk_state.BodyViews.addresses`). The body's position is
@@ -244,6 +257,15 @@ def _read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArra
         out[j, 3] = raw[VIEW_V]
         out[j, 4] = raw[VIEW_V + 1]
         out[j, 5] = raw[VIEW_W]
+
+
+@numba.njit(cache=True)
+def chipmunk_step(raw: tuple, out: FloatArray) -> None:
+    """Chipmunk's step of the space, then the machine's state read into ``out`` (a
+    :class:`MachineState` table), in compiled code; ``raw``: :meth:`Machine.raw_step`'s."""
+    function, space, dt, addresses, cogs = raw
+    space_step(function, space, dt)
+    read_bodies(addresses, cogs, out)
 
 
 @numba.njit(cache=True)
