@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, kernel, uniform_table
-from perga.contact.soft.granules import _opening
+from perga.contact.soft.granules import opening_of
 from perga.contact.soft.polygon_set import (
     FREE,
     HIST_NORMAL_IMPULSE,
@@ -103,18 +103,18 @@ def test_plain_tuples_for_advance_follow_the_field_order():
 
 
 def test_the_opening_follows_the_field_order():
-    """``granules._opening`` builds ``kernel.Opening`` by position: the kick's step, the rotor's
+    """``granules.opening_of`` builds ``kernel.Opening`` by position: the kick's step, the rotor's
     ω only for a co-rotating floor, the units, the effect's own counters, the log's arrays."""
     energy = np.zeros(2)
     kept = (np.zeros((3, 2)), np.zeros((3, 2)), np.zeros(3), np.zeros((4, 2)), np.zeros((1, 2)))
-    named = kernel.Opening(*_opening((FloorKick(0.25, True, energy), 7.0), kept))
+    named = kernel.Opening(*opening_of((FloorKick(0.25, True, energy), 7.0), kept))
     assert (named.dv_max, named.omega, named.corotating, named.keep) == (0.25, 7.0, True, True)
     assert (named.velocity_unit, named.length_unit) == (u.VELOCITY, u.LENGTH)
     assert named.energy is energy
     assert all(a is b for a, b in zip(named.kept, kept, strict=True))
-    named = kernel.Opening(*_opening((FloorKick(0.25, False, energy), 7.0), None))
+    named = kernel.Opening(*opening_of((FloorKick(0.25, False, energy), 7.0), None))
     assert named.omega == 0.0 and not named.corotating and not named.keep
-    named = kernel.Opening(*_opening(None, None))
+    named = kernel.Opening(*opening_of(None, None))
     assert named.energy.shape == (0,) and not named.keep
 
 
@@ -135,7 +135,8 @@ def test_advance_takes_named_or_plain_bundles_alike():
         named.start, named.nbr, named.hist, _, cstart, cpoly, _, _ = kernel.advance(
             kernel.Settings(*settings), kernel.Granules(*state), kernel.GranuleProps(*props),
             kernel.Bonds(*bonds), params, kernel.Walls(*walls), polygons,
-            kernel.NeighbourList(*nbrs), kernel.Work(*work), kernel.Opening(*_opening(None, None)),
+            kernel.NeighbourList(*nbrs), kernel.Work(*work),
+            kernel.Opening(*opening_of(None, None)),
         )  # fmt: skip
         named._listed = (cstart, cpoly, *named._listed[2:])
         named._rebuild = False

@@ -11,6 +11,7 @@ import pytest
 
 from perga.case import load_case
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
+from perga.contact.soft.granules import pace_coasting
 from perga.engine import Simulation
 from perga.model.from_case import scene_spec
 
@@ -128,7 +129,7 @@ def test_looking_for_coasting_granules_pauses_where_few_coast(share, waits) -> N
     1, then 2, 4, … calls; a tenth or more keeps it on."""
     row = contact_parameters("linear", 0.6, k_n=1e4)
     g = chamber_gas(10, 1, row)
-    g._pace_coasting(True, round(share * 10 * 10_000), 10_000)
-    assert g._coast_wait == waits
-    g._pace_coasting(True, 0, 10_000)
-    assert g._coast_wait == (2 if waits else 1)
+    pace_coasting(g.coast_pacing, True, round(share * 10 * 10_000), g.n, 10_000)
+    assert g.coast_pacing[0] == waits
+    pace_coasting(g.coast_pacing, True, 0, g.n, 10_000)
+    assert g.coast_pacing[0] == (2 if waits else 1)

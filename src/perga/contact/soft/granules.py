@@ -66,9 +66,9 @@ _NOTHING_KEPT = (
 )
 
 
-def _opening(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ...] | None) -> tuple:
+def opening_of(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ...] | None) -> tuple:
     """``kernel.Opening`` as a plain tuple (``SoftGranules._bundles``) for ``SoftGranules.step``'s
-    floor and kept."""
+    ``floor`` and ``kept``."""
     kick, omega = (None, 0.0) if floor is None else floor
     return (
         0.0 if kick is None else kick.dv_max,
@@ -80,6 +80,21 @@ def _opening(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ...]
         kept is not None,
         _NOTHING_KEPT if kept is None else kept,
     )
+
+
+@numba.njit(cache=True)
+def pace_coasting(pacing: np.ndarray, tried: bool, coasted: int, n: int, n_steps: int) -> None:
+    """After a call of ``n_steps`` steps of ``n`` granules: where it looked for coasting
+    granules (``tried``) and fewer than a tenth of its granule steps coasted, do not look for
+    the next 1, 2, 4, … 64 calls (looking costs about a pass over the neighbour list; the
+    results are the same either way). ``pacing``: the calls left to wait, the next pause."""
+    if not tried:
+        pacing[0] = max(pacing[0] - 1, 0)
+    elif 10 * coasted < n * n_steps:
+        pacing[0] = pacing[1]
+        pacing[1] = min(2 * pacing[1], 64)
+    else:
+        pacing[1] = 1
 
 
 def _held(a, n: int) -> np.ndarray:
@@ -226,8 +241,9 @@ class SoftGranules:
         (``perga.contact.soft.coasting``: the same floats as step by step)."""
         self.coasted = 0
         """Granule steps taken coasting, a diagnostic."""
-        self._coast_wait = 0
-        self._coast_backoff = 1
+        self.coast_pacing = np.array([0, 1], dtype=np.int64)
+        """Calls left before coasting is looked for again, and the next pause
+        (:func:`pace_coasting`)."""
         self._forget_candidates()
 
     @property
@@ -442,36 +458,54 @@ class SoftGranules:
         if switch:
             numba.set_num_threads(self.threads)
         try:
-            threaded = self.threads > 1 and self._acc.shape[0] > 1
-            advance = kernel.advance_threaded if threaded else kernel.advance
-            coast = self.coasting and self._coast_wait == 0 and n_steps > 1
+            advance = kernel.advance_threaded if self.threaded else kernel.advance
+            coast = self.coasting and self.coast_pacing[0] == 0 and n_steps > 1
             self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists, coasted = advance(
                 *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap), coast),
-                _opening(floor, kept),
+                opening_of(floor, kept),
             )
         finally:
             if switch:
                 numba.set_num_threads(previous)
-        self._pace_coasting(coast, coasted, n_steps)
+        pace_coasting(self.coast_pacing, coast, coasted, self.n, n_steps)
+        self.took(1, n_steps, rebuilt, lists, coasted, cstart, cpoly)
+
+    @property
+    def threaded(self) -> bool:
+        """Whether a call computes the pair forces on numba's threads."""
+        return self.threads > 1 and self._acc.shape[0] > 1
+
+    def took(
+        self,
+        calls: int,
+        n_steps: int,
+        rebuilt: int,
+        lists: int,
+        coasted: int,
+        cstart: np.ndarray,
+        cpoly: np.ndarray,
+    ) -> None:
+        """Book ``calls`` kernel calls of ``n_steps`` steps each (made by :meth:`step` or by
+        compiled code with :meth:`call_arguments`): the rebuilds, candidate lists and coasted
+        steps they counted, the candidate list (``cstart``, ``cpoly``) after the last; the
+        neighbour list is the caller's to set."""
+        self.coasted += coasted
         self._listed = (cstart, cpoly, *self._listed[2:])
         self._rebuild = False
         self.n_rebuilds += int(rebuilt)
         self.n_candidate_lists += int(lists)
-        self.steps += n_steps
-        self.time += n_steps * self.dt
+        self.steps += calls * n_steps
+        for _ in range(calls):
+            self.time += n_steps * self.dt
 
-    def _pace_coasting(self, tried: bool, coasted: int, n_steps: int) -> None:
-        """Count the coasted steps; where fewer than a tenth of a call's granule steps coasted,
-        do not look for coasting granules for the next 1, 2, 4, … 64 calls (looking costs
-        about a pass over the neighbour list; the results are the same either way)."""
-        self.coasted += coasted
-        if not tried:
-            self._coast_wait = max(self._coast_wait - 1, 0)
-        elif 10 * coasted < self.n * n_steps:
-            self._coast_wait = self._coast_backoff
-            self._coast_backoff = min(2 * self._coast_backoff, 64)
-        else:
-            self._coast_backoff = 1
+    def call_arguments(self, n_steps: int) -> tuple:
+        """The arguments of ``kernel.advance`` but the opening, for calls of ``n_steps`` steps made
+        by compiled code, which sets ``rebuild`` (after the first), ``first_step`` and ``coast``
+        of each (:func:`pace_coasting`), and hands the calls to :meth:`took`."""
+        polys, table = self._poly
+        if self.polygon_hist.shape != (self.n, polys.n_poly, HIST_COLUMNS):
+            raise ValueError("polygon_hist does not match the granules and polygons")
+        return self._bundles(polys, table, int(n_steps), 0.0, math.inf)
 
     def _bundles(
         self,

@@ -130,34 +130,33 @@ class MachinePolygons:
     def pose(self, ahead: float, state: MachineState) -> None:
         """Pose every hammer polygon where its body will be ``ahead`` s after ``state`` at its
         velocity then (positions by v·ahead, angles by ω·ahead), in SI; the wall stays."""
+        pose_polygons(state.table, *self.pose_arguments(ahead))
+
+    def pose_arguments(self, ahead: float) -> tuple:
+        """The arguments of :func:`pose_polygons` after the state, for :meth:`pose`."""
         p = self.polygons
-        _pose(
-            state.table,
-            self._polygon_rows,
-            self._vertex_rows,
-            self._relative,
-            self._polygon_hinges,
-            ahead,
-            p.vertices,
-            p.com,
-            p.velocity,
-            p.omega,
-            p.pivot,
-        )
+        return (
+            self._polygon_rows, self._vertex_rows, self._relative, self._polygon_hinges, ahead,
+            p.vertices, p.com, p.velocity, p.omega, p.pivot,
+        )  # fmt: skip
 
     def apply_loads(self) -> float:
         """Set the polygons' mean loads (from the last kernel call) as the bodies' force and
         torque for the next Pymunk step; returns the mean moment about the axis on the hammers
         the rotor drives, N·m."""
+        return load_bodies(*self.load_arguments())
+
+    def load_arguments(self) -> tuple:
+        """The arguments of :func:`load_bodies`, for :meth:`apply_loads`."""
         p = self.polygons
-        return _apply_loads(
+        return (
             p.force, p.torque, p.moment, self._polygon_rows, self.machine, self._loads,
             self._body_addresses(),
         )  # fmt: skip
 
 
 @numba.njit(cache=True)
-def _pose(
+def pose_polygons(
     state: np.ndarray,
     polygon_rows: np.ndarray,
     vertex_rows: np.ndarray,
@@ -198,7 +197,7 @@ def _pose(
 
 
 @numba.njit(cache=True)
-def _apply_loads(
+def load_bodies(
     force: np.ndarray,
     torque: np.ndarray,
     moment: np.ndarray,
