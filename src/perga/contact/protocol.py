@@ -16,6 +16,9 @@ simulation calls, in this order (:mod:`perga.engine.simulation` has the whole st
    impulse about the axis that the contacts put on the rotor-driven bodies (for the drive's
    work in the ledger).
 
+A model may take several whole steps in one compiled call instead
+(:meth:`ContactModel.machine_steps`), the same floats, where the step needs no Python.
+
 Between steps the process (a feed, an outlet, damage) may add and remove granules; each has a
 persistent number (its id), which impacts, releases and frames name.
 
@@ -40,6 +43,7 @@ from perga.model.spec import GranuleSpec
 if TYPE_CHECKING:
     from perga.engine.effects import FloorKick
     from perga.engine.machine import MachineState
+    from perga.engine.simulation import CompiledMachine
 
 FloatArray = NDArray[np.float64]
 
@@ -125,6 +129,14 @@ class ContactModel(Protocol):
         """Work after Chipmunk's step that ended at ``time`` (s), ``machine`` the rotor and
         hammers now; returns the angular impulse about the rotor axis the contacts put on the
         rotor-driven bodies during the step, internal units (0 when energy is not tracked)."""
+        ...
+
+    def machine_steps(self, limit: int, machine: CompiledMachine) -> int:
+        """Take up to ``limit`` whole machine steps in compiled code, each the floats of the
+        four calls above with ``machine``'s compiled parts (Chipmunk's step, the state reads and
+        the energy meter), but the work :meth:`after_machine_step` does for the last of them,
+        which the simulation then calls; stop after a step that needs that work (a contact
+        change to record, a release). Returns how many (0: none offered now)."""
         ...
 
     releases: list[Release]

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from contextlib import AbstractContextManager, nullcontext
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pymunk
@@ -41,6 +42,9 @@ from perga.engine.effects import FloorKick
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
+
+if TYPE_CHECKING:
+    from perga.engine.simulation import CompiledMachine
 
 
 class _Kinematics:
@@ -163,6 +167,10 @@ class RigidContacts:
         if self._bonds:
             self._hold_or_release(time)
         return moment
+
+    def machine_steps(self, limit: int, machine: CompiledMachine) -> int:
+        """None: the impulse contacts are Chipmunk's collision handlers, Python callbacks."""
+        return 0
 
     def energy_terms(self) -> LedgerTerms:
         """The granules' kinetic energy, gravity's work on them, what fed and removed granules

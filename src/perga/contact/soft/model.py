@@ -28,14 +28,17 @@ import math
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
 from time import monotonic
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.soft.build import granule_table_materials, soft_granules
+from perga.contact.soft.granules import opening_of
 from perga.contact.soft.impacts import SoftImpactLog
 from perga.contact.soft.kernel import COUNT_RELEASES
 from perga.contact.soft.machine import MachinePolygons
+from perga.contact.soft.machine_steps import machine_steps
 from perga.contact.soft.threads import RECHECK, kernel_chunks, kernel_threads, numba_threads
 from perga.cores import CoreMonitor
 from perga.engine import units as u
@@ -43,6 +46,9 @@ from perga.engine.effects import FloorKick
 from perga.engine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
+
+if TYPE_CHECKING:
+    from perga.engine.simulation import CompiledMachine
 
 ANGULAR_IMPULSE = u.FORCE * u.LENGTH * u.TIME
 """N·m·s per internal angular impulse unit."""
@@ -129,6 +135,9 @@ class SoftContacts:
         self._gone = LedgerTerms()
         self._inflow = 0.0
         self._moment = 0.0
+        self.kernel_share = (0, 0)
+        """Processor cycles spent in kernel calls and in all of :meth:`machine_steps`' compiled
+        steps so far (the kernel's share of them, for ``benchmarks/separator_speed.py``)."""
         self.floor: FloorKick | None = None
         """Floor friction's kick, once the effects' runner has handed it over
         (:meth:`_Kinematics.take_floor_kick`): the kernel call applies it first."""
@@ -166,6 +175,34 @@ class SoftContacts:
         )
         moment = self.polygons.apply_loads()
         self._moment = moment * self._machine_dt / ANGULAR_IMPULSE
+
+    def machine_steps(self, limit: int, machine: CompiledMachine) -> int:
+        """Take up to ``limit`` machine steps in one compiled call
+        (:mod:`perga.contact.soft.machine_steps`), stopping after one in which the kernel
+        counted a contact change the impact log must look at, or a release; returns how many
+        (0 where the pair forces are threaded: then a step at a time)."""
+        g = self.granules
+        if self._cores is not None or g.threaded:
+            return 0
+        kept = None if self.log is None else self.log.kept()
+        floor = None if self.floor is None else (self.floor, 0.0)  # ω: each step's, in the loop
+        out = machine_steps(
+            limit,
+            (machine.raw, machine.before, machine.after),
+            (machine.metered, machine.meter),
+            self.polygons.pose_arguments(self.granule_dt),
+            self.polygons.load_arguments(),
+            g.call_arguments(self.substeps),
+            opening_of(floor, kept),
+            (g.coasting, g.coast_pacing),
+            (self._machine_dt, ANGULAR_IMPULSE),
+            (self.log is not None, self._bonds),
+        )
+        steps, rebuilds, lists, coasted, g.start, g.nbr, g.hist, cstart, cpoly, moment = out[:10]
+        g.took(steps, self.substeps, rebuilds, lists, coasted, cstart, cpoly)
+        self._moment = moment
+        self.kernel_share = (self.kernel_share[0] + out[10], self.kernel_share[1] + out[11])
+        return steps
 
     def _follow_free_cores(self) -> None:
         """Threads as the free cores allow, looked at every ``RECHECK`` wall seconds: a job
