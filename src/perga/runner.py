@@ -407,7 +407,7 @@ class _Run:
         with _ending(summary), self.sim.contacts.running():
             while self.sim.steps < self.n_steps:
                 sim = self.sim
-                sim.step()
+                sim.advance(self._steps_to_look(report_every if progress else 0))
                 stop.check()
                 last = sim.steps == self.n_steps
                 if self.frames.due(sim.time) or last:
@@ -418,6 +418,18 @@ class _Run:
                     write = time.perf_counter() - self.last_written >= self.every_wall
                     self.checkpoint(summary, start, write)
             summary.status = COMPLETED
+
+    def _steps_to_look(self, report_every: int) -> int:
+        """The steps the simulation may take at once: to the end, or to the next step at which
+        a frame, a progress report (every ``report_every`` steps; 0: none) or a checkpoint is
+        due, whichever comes first."""
+        sim = self.sim
+        steps = [self.n_steps - sim.steps, self.frames.steps_to_next(sim.steps, sim.dt)]
+        if report_every:
+            steps.append(report_every - sim.steps % report_every)
+        if self.grid is not None:
+            steps.append(self.grid.steps_to_next(sim.steps, sim.dt))
+        return min(steps)
 
 
 def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path) -> None:

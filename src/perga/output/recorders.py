@@ -60,11 +60,23 @@ class PhaseLock:
 
     def due(self, t: float) -> bool:
         """True if frame k is due at time t (then k advances past t)."""
-        # a relative tolerance of 1e-9 absorbs round-off in steps·dt against k·every
-        if t + 1e-9 * self.every < self.frame * self.every:
+        if self._early(t):
             return False
         self.frame = math.floor(t / self.every + 1e-9) + 1
         return True
+
+    def steps_to_next(self, step: int, dt: float) -> int:
+        """The steps of ``dt`` (s) from step ``step`` to the first step n whose time n·dt makes
+        the next frame due (at least 1); :meth:`due` is not called."""
+        n = max(step + 1, math.floor(self.frame * self.every * (1.0 - 2e-9) / dt) - 1)
+        while self._early(n * dt):
+            n += 1
+        return n - step
+
+    def _early(self, t: float) -> bool:
+        """Whether ``t`` is before the next frame's time; a relative tolerance of 1e-9 absorbs
+        round-off in steps·dt against k·every."""
+        return t + 1e-9 * self.every < self.frame * self.every
 
 
 class GranuleRecorder(TableRecorder):
