@@ -88,16 +88,21 @@ def test_whole_steps_give_the_floats_of_steps_one_by_one(overrides) -> None:
     assert all(changed or n == 400 for n, changed in batches[1:-1])
 
 
-def test_whole_steps_keep_the_pace_of_coasting() -> None:
-    """A pause in the search for coasting granules (``granules.pace_coasting``), set on both
-    twins: the compiled steps count it down and take it up as the Python steps do."""
+def test_whole_steps_keep_what_calls_hand_on() -> None:
+    """What one kernel call hands the next, set on both twins after their first step: a pause
+    in the search for coasting granules (``granules.pace_coasting``), counted down and taken
+    up, and a rebuild of the neighbour list asked for, made by the first call alone."""
     whole, single = _twins(CASES / "soft-separator.toml", *SWEPT)
     for sim in (whole, single):
+        sim.step()
         sim.contacts.granules.coast_pacing[:] = (3, 8)
+        sim.contacts.granules._rebuild = True
+    rebuilds = whole.contacts.granules.n_rebuilds
     _batches(whole, 0.005, 400)
     _one_by_one(single, 0.005)
     _assert_same(whole, single)
     assert whole.contacts.granules.coasted > 0
+    assert whole.contacts.granules.n_rebuilds > rebuilds
 
 
 @pytest.mark.parametrize(
