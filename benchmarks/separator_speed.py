@@ -2,10 +2,12 @@
 step spent outside the soft kernel, optionally side by side with another commit.
 
 Each measurement is one `perga run` done in a fresh subprocess (``--one``) through
-``perga.runner.run_case``, with ``SoftGranules.step`` (the compiled kernel call) and
-``Simulation.step`` wrapped by timers: wall time of the run (``summary.json``, build and output
-included), time in ``Simulation.step``, time in the kernel, and the share of the granule steps
-that coasted (``perga.contact.soft.coasting``; 0 for a tree without it). Variants (this tree,
+``perga.runner.run_case``, with ``Simulation.advance`` (``Simulation.step`` in a tree before
+it), ``SoftGranules.step`` (a kernel call from Python) and the soft model's compiled whole
+steps (``perga.contact.soft.machine_steps``) wrapped by timers: wall time of the run
+(``summary.json``, build and output included), time in the steps, time in the kernel (in the
+compiled steps, their time times the kernel's share of the processor cycles they counted), and
+the share of the granule steps that coasted (``perga.contact.soft.coasting``). Variants (this tree,
 and with ``--against REF`` the commit REF checked out in a temporary worktree) are interleaved
 run by run; figures are medians over ``--repeats``, ratios are medians of run-by-run paired ratios.
 Every variant first runs each case once untimed (numba's cache).
@@ -38,13 +40,15 @@ CASES = {
 
 
 def one(case: str, duration: float, out: str) -> None:
-    """Run ``case`` for ``duration`` s into ``out`` with the step and kernel timed; print JSON."""
+    """Run ``case`` for ``duration`` s into ``out`` with the steps and the kernel timed; print
+    JSON."""
+    import perga.contact.soft.model as soft
     from perga.case import load_case
     from perga.contact.soft.granules import SoftGranules
     from perga.engine.simulation import Simulation
     from perga.runner import prepare_directory, run_case
 
-    timers = {"step": 0.0, "kernel": 0.0}
+    timers = {"step": 0.0, "kernel": 0.0, "coasted": 0, "granule_steps": 0}
 
     def timed(name: str, method):
         def wrapper(*args, **kwargs):
@@ -56,18 +60,33 @@ def one(case: str, duration: float, out: str) -> None:
 
         return wrapper
 
-    Simulation.step = timed("step", Simulation.step)  # type: ignore[method-assign]
+    stepping = "advance" if hasattr(Simulation, "advance") else "step"  # advance since 2026-11-27
+    setattr(Simulation, stepping, timed("step", getattr(Simulation, stepping)))
     kernel_step = timed("kernel", SoftGranules.step)
 
     def counted(self, n_steps=1, **kwargs):
-        """The kernel call, timed, with its granule steps and those that coasted counted."""
-        before = getattr(self, "coasted", 0)
+        """A kernel call from Python, timed, with its granule steps and those that coasted."""
+        before = self.coasted
         kernel_step(self, n_steps, **kwargs)
-        timers["coasted"] += getattr(self, "coasted", 0) - before
+        timers["coasted"] += self.coasted - before
         timers["granule_steps"] += self.n * n_steps
 
-    timers |= {"coasted": 0, "granule_steps": 0}
     SoftGranules.step = counted  # type: ignore[method-assign]
+    if hasattr(soft, "machine_steps"):
+        compiled = soft.machine_steps
+
+        def shared(*args):
+            """Whole steps in one compiled call: the kernel's time is the call's time times the
+            kernel's share of the cycles it counted; the granule steps as above."""
+            start = time.perf_counter()
+            out = compiled(*args)
+            timers["kernel"] += (time.perf_counter() - start) * out[10] / max(out[11], 1)
+            settings, granules = args[5][0], args[5][1]
+            timers["coasted"] += out[3]
+            timers["granule_steps"] += out[0] * settings[0] * granules[0].shape[0]
+            return out
+
+        soft.machine_steps = shared
     path = Path(case)
     loaded = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
     prepare_directory(Path(out), overwrite=True)

@@ -7,7 +7,9 @@ those of the real step (the kernel's phase includes the floor-friction kick and 
 log's copy of the state, which the kernel call makes first). Compiled code first needed inside
 the timed window (the impact log's scan runs only after a step that opened or closed a contact)
 compiles there on the first run after numba's cache was cleared: run it twice after changing
-compiled code.
+compiled code. These are the phases of ``Simulation.step``, the step taken one at a time; a run
+of the soft model takes its steps compiled, several at once, where the case allows
+(``Simulation.advance``), and ``benchmarks/separator_speed.py`` times those.
 
     python benchmarks/step_phases.py                                 # the soft separator
     python benchmarks/step_phases.py cases/separator.toml --start 0.15
