@@ -467,7 +467,8 @@ class SoftGranules:
         finally:
             if switch:
                 numba.set_num_threads(previous)
-        pace_coasting(self.coast_pacing, coast, coasted, self.n, n_steps)
+        if coast or self.coast_pacing[0]:  # else the pace stays as it is
+            pace_coasting(self.coast_pacing, coast, coasted, self.n, n_steps)
         self.took(1, n_steps, rebuilt, lists, coasted, cstart, cpoly)
 
     @property
