@@ -169,7 +169,8 @@ class RigidContacts:
         return moment
 
     def machine_steps(self, limit: int, machine: CompiledMachine) -> int:
-        """None: the impulse contacts are Chipmunk's collision handlers, Python callbacks."""
+        """No compiled steps (0): the impulse contacts are Chipmunk's collision handlers, Python
+        callbacks."""
         return 0
 
     def energy_terms(self) -> LedgerTerms:
