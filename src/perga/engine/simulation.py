@@ -38,6 +38,9 @@ Because positions move before velocities are updated (step 4), the state after a
 (x_{n+1}, v_{n+1}) with v_{n+1} computed from the forces at x_{n+1}: symplectic Euler, first
 order; in leapfrog terms the velocities are half a step ahead of the positions. Soft granules
 and the hammers they load form one kick-drift scheme (docs/architecture.md).
+
+:meth:`Simulation.advance` takes several steps at once in this order, compiled, where the
+contact model offers it and nothing of the step needs Python (docs/architecture.md).
 """
 
 from __future__ import annotations

@@ -496,7 +496,7 @@ class SoftGranules:
         self.n_rebuilds += int(rebuilt)
         self.n_candidate_lists += int(lists)
         self.steps += calls * n_steps
-        for _ in range(calls):
+        for _ in range(calls):  # call by call: the floats of calls made one at a time
             self.time += n_steps * self.dt
 
     def call_arguments(self, n_steps: int) -> tuple:

@@ -3,9 +3,10 @@
 
 Each step is :meth:`perga.engine.simulation.Simulation.step`'s order (that module's doc), made
 of the compiled functions the Python step calls, on the same arrays, so it gives the same
-floats: the machine's state read (``engine.machine.read_bodies``), the hammers posed one granule
-step ahead (``machine.pose_polygons``), one kernel call (``kernel.advance``: the floor kick
-handed over, the impact log's copy, the granule steps), the loads written onto the hammer bodies
+floats: the machine's state read (``engine.machine.read_bodies``; a step's end state is the
+next one's start, read once), the hammers posed one granule step ahead
+(``machine.pose_polygons``), one kernel call (``kernel.advance``: the floor kick handed over,
+the impact log's copy, the granule steps), the loads written onto the hammer bodies
 (``machine.load_bodies``), Chipmunk's step and the state read again
 (``engine.machine.chipmunk_step``), the energy meter (``engine.energy.meter_step``) and the pace
 of coasting (``granules.pace_coasting``). What the Python step adds is left to it: the call
@@ -79,8 +80,8 @@ def machine_steps(
     steps = 0
     kernel_ticks = 0
     started = _ticks()
+    read_bodies(addresses, cogs, before)
     while steps < limit:
-        read_bodies(addresses, cogs, before)
         pose_polygons(before, *pose)
         coast = coast_on and pacing[0] == 0 and n_steps > 1
         called = _ticks()
@@ -109,6 +110,7 @@ def machine_steps(
             watch_releases and counts[RELEASES] != releases
         ):
             break
+        before, after = after, before  # nothing moves the bodies between two steps
     ticks = _ticks() - started
     return (
         steps, rebuilds, lists, coasted, start, nbr, pair_hist, cstart, cpoly, moment,
