@@ -67,20 +67,21 @@ def _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, out, k0, cap):
     xi = x[i, 0]
     yi = x[i, 1]
     k = 0
+    gx0 = max(cx - 1, 0)
+    gx1 = min(cx + 2, ncx)
     for gy in range(max(cy - 1, 0), min(cy + 2, ncy)):
-        for gx in range(max(cx - 1, 0), min(cx + 2, ncx)):
-            c = gy * ncx + gx
-            for s in range(cstart[c], cstart[c + 1]):
-                j = order[s]
-                if j <= i:
-                    continue
-                reach = r[i] + r[j] + skin
-                dx = x[j, 0] - xi
-                dy = x[j, 1] - yi
-                if dx * dx + dy * dy < reach * reach:
-                    if k < cap:
-                        out[k0 + k] = j
-                    k += 1
+        # the row's three cells are consecutive in the cell order: one run of granules
+        for s in range(cstart[gy * ncx + gx0], cstart[gy * ncx + gx1]):
+            j = order[s]
+            if j <= i:
+                continue
+            reach = r[i] + r[j] + skin
+            dx = x[j, 0] - xi
+            dy = x[j, 1] - yi
+            if dx * dx + dy * dy < reach * reach:
+                if k < cap:
+                    out[k0 + k] = j
+                k += 1
     return k
 
 
@@ -91,9 +92,10 @@ def build(x, r, skin, old_start, old_nbr, old_hist):
     old_start, old_nbr, old_hist: the previous list and its tangential history (empty arrays
     for none); history of pairs present in both lists is copied, new pairs start at 0.
 
-    Each granule's 3×3 cells are scanned once, into a scratch row of ``_ROW_CAP`` entries; the
-    rows are then gathered into the list, and a longer row is scanned again straight into it
-    (the same order: a row lists its neighbours in scan order either way).
+    Each granule's 3×3 cells are scanned once, granules taken cell by cell, into a scratch row
+    of ``_ROW_CAP`` entries; the rows are then gathered into the list, and a longer row is
+    scanned again straight into it (the same order: a row lists its neighbours in scan order
+    either way).
     """
     n = x.shape[0]
     if n == 0:
@@ -101,7 +103,8 @@ def build(x, r, skin, old_start, old_nbr, old_hist):
     cell, order, cstart, ncx, ncy = _cells(x, r, skin)
     counts = np.zeros(n + 1, np.int64)
     found = np.empty((n, _ROW_CAP), np.int64)
-    for i in prange(n):
+    for s in prange(n):
+        i = order[s]  # cell by cell: the cells it scans are those just scanned, in cache
         counts[i + 1] = _scan(i, x, r, skin, cell, order, cstart, ncx, ncy, found[i], 0, _ROW_CAP)
     for i in range(n):
         counts[i + 1] += counts[i]
