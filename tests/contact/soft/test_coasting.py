@@ -11,7 +11,7 @@ import pytest
 
 from perga.case import load_case
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
-from perga.contact.soft.granules import pace_coasting
+from perga.contact.soft.granules import looks_for_coasting, pace_coasting
 from perga.engine import Simulation
 from perga.model.from_case import scene_spec
 
@@ -133,3 +133,16 @@ def test_looking_for_coasting_granules_pauses_where_few_coast(share, waits) -> N
     assert g.coast_pacing[0] == waits
     pace_coasting(g.coast_pacing, True, 0, g.n, 10_000)
     assert g.coast_pacing[0] == (2 if waits else 1)
+
+
+@pytest.mark.parametrize(
+    ("coasting", "waits", "n_steps", "looks"),
+    [(True, 0, 2, True), (True, 1, 2, False), (True, 0, 1, False), (False, 0, 2, False)],
+    ids=["on", "paused", "one step", "off"],
+)
+def test_a_call_looks_for_coasting_granules_only_when_on_unpaused_and_longer_than_a_step(
+    coasting, waits, n_steps, looks
+) -> None:
+    """The rule both the Python step and the compiled steps ask (``looks_for_coasting``)."""
+    pacing = np.array([waits, 1], dtype=np.int64)
+    assert looks_for_coasting(coasting, pacing, n_steps) is looks

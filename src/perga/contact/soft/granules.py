@@ -83,6 +83,13 @@ def opening_of(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ..
 
 
 @numba.njit(cache=True)
+def looks_for_coasting(coasting: bool, pacing: np.ndarray, n_steps: int) -> bool:
+    """Whether a call of ``n_steps`` steps looks for coasting granules: coasting on, no pause
+    left (``pacing``, :func:`pace_coasting`) and more than one step to take at once."""
+    return coasting and pacing[0] == 0 and n_steps > 1
+
+
+@numba.njit(cache=True)
 def pace_coasting(pacing: np.ndarray, tried: bool, coasted: int, n: int, n_steps: int) -> None:
     """After a call of ``n_steps`` steps of ``n`` granules: where it looked for coasting
     granules (``tried``) and fewer than a tenth of its granule steps coasted, do not look for
@@ -459,7 +466,7 @@ class SoftGranules:
             numba.set_num_threads(self.threads)
         try:
             advance = kernel.advance_threaded if self.threaded else kernel.advance
-            coast = self.coasting and self.coast_pacing[0] == 0 and n_steps > 1
+            coast = looks_for_coasting(self.coasting, self.coast_pacing, n_steps)
             self.start, self.nbr, self.hist, rebuilt, cstart, cpoly, lists, coasted = advance(
                 *self._bundles(polys, table, int(n_steps), float(drag), float(v_cap), coast),
                 opening_of(floor, kept),

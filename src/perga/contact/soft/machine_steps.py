@@ -22,7 +22,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from perga.contact.soft import kernel
-from perga.contact.soft.granules import pace_coasting
+from perga.contact.soft.granules import looks_for_coasting, pace_coasting
 from perga.contact.soft.machine import load_bodies, pose_polygons
 from perga.engine.energy import meter_step
 from perga.engine.machine import chipmunk_step, read_bodies
@@ -83,7 +83,7 @@ def machine_steps(
     read_bodies(addresses, cogs, before)
     while steps < limit:
         pose_polygons(before, *pose)
-        coast = coast_on and pacing[0] == 0 and n_steps > 1
+        coast = looks_for_coasting(coast_on, pacing, n_steps)
         called = _ticks()
         out = kernel.advance(
             (n_steps, dt, gravity, skin, drag, v_cap, pairs, rebuild and steps == 0,
