@@ -1,11 +1,12 @@
 """Checkpoints of a run: its whole state at a step boundary, written atomically, the last two
 kept, for ``perga run --resume RUN``.
 
-A checkpoint holds the simulation, pickled (the machine's Pymunk space with its cached contacts,
-the contact model's arrays with their tangential springs and neighbour lists, the process's
-random-number state, the impacts so far, the energy meter), Chipmunk's state that pymunk's
-pickling does not carry exactly (:mod:`perga.engine.chipmunk_state`), and what the runner hands
-over (the recorders with their files' lengths, the frame clock, the summary so far).
+A checkpoint holds the simulation, pickled (the machine's Pymunk space with its cached contacts
+and the Chipmunk state that pymunk's pickling does not carry exactly, which the machine adds
+(:mod:`perga.engine.chipmunk_state`); the contact model's arrays with their tangential springs
+and neighbour lists, the process's random-number state, the impacts so far, the energy meter),
+and what the runner hands over (the recorders with their files' lengths, the frame clock, the
+summary so far).
 
 A run takes its checkpoints on a grid of simulated time (``output.checkpoint_every``) and, at
 each, goes on from the checkpoint itself (:func:`read` of the bytes it just wrote), exactly as
@@ -40,7 +41,6 @@ from functools import cache
 from pathlib import Path
 
 import perga
-from perga.engine.chipmunk_state import capture, restore
 from perga.engine.simulation import Simulation
 from perga.output.files import write_all
 
@@ -120,7 +120,6 @@ def dump(sim: Simulation, handed_over: dict[str, object], run: Path, case: str) 
             {
                 "case": case,
                 "sim": sim,
-                "chipmunk": capture(sim.machine.space),
                 "runner": runner.getvalue(),
             },
             protocol=pickle.HIGHEST_PROTOCOL,
@@ -172,9 +171,7 @@ def read(data: bytes, name: str = "checkpoint") -> tuple[Simulation, dict[str, o
         raise CheckpointError(f"{name}: written by perga {version}, this is {code_version()}")
     with _no_collection():
         state = pickle.loads(body)
-    sim = state.pop("sim")
-    restore(sim.machine.space, state.pop("chipmunk"))
-    return sim, state
+    return state.pop("sim"), state
 
 
 def load(run: Path, case: str) -> tuple[Simulation, dict[str, object], Path]:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numba
 import numpy as np
@@ -47,8 +48,10 @@ from perga.engine.chipmunk_state import (
     VIEW_W,
     VIEW_WIDTH,
     BodyViews,
+    capture,
     doubles_at,
     raw_space_step,
+    restore,
     space_step,
 )
 from perga.engine.effects import Effect, SwingStops, build_effects
@@ -114,6 +117,18 @@ class Machine:
     _raw: BodyViews | None = field(default=None, repr=False)
     _hammer_rows: NDArray[np.int64] | None = field(default=None, repr=False)
     _cogs: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
+
+    def __getstate__(self) -> dict[str, object]:
+        """The fields, with what pymunk's pickle of the space misses
+        (:func:`~perga.engine.chipmunk_state.capture`): a copy or a pickle round trip steps as
+        the original does."""
+        return {**self.__dict__, "_chipmunk": capture(self.space)}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        fields = dict(state)
+        chipmunk = fields.pop("_chipmunk")
+        self.__dict__.update(fields)
+        restore(self.space, chipmunk)
 
     @property
     def bodies(self) -> list[pymunk.Body]:
