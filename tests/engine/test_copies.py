@@ -1,7 +1,8 @@
 """A simulation copied (``copy.deepcopy``) or pickled and read back steps as the original. The
 machine carries Chipmunk's state that pymunk's pickle misses (``Machine.__getstate__``,
 ``perga.engine.chipmunk_state``): without it a hinged hammer comes back displaced and its
-joints start cold, and the copy's granules end up centimetres from the original's."""
+joints start cold (the soft separator's copied granules were up to 0.27 m from the original's
+3,000 steps later)."""
 
 from __future__ import annotations
 
@@ -31,8 +32,8 @@ def stepped(case: str, seconds: float) -> Simulation:
 
 
 def state(sim: Simulation) -> list[np.ndarray]:
-    """Everything a step reads: the granules' positions, velocities and spins, the machine's
-    raw Chipmunk state (bodies and joints' accumulated impulses)."""
+    """What the copies are compared on: the granules' positions, velocities and spins, the
+    machine's raw Chipmunk state (bodies, and joints' accumulated impulses)."""
     chipmunk = capture(sim.machine.space)
     return [
         sim.granule_positions(),
