@@ -1,9 +1,10 @@
 """What the granules' order in memory costs the soft kernel (issue 14, item 2: spatial
 reordering), measured before building it.
 
-The 1,000-granule soft separator case scaled to N granules as in ``soft_scaling.py`` (radius
-1.5 mm·√(1000/N)), built three times with the same granules in three row orders: the case's
-own (its placement), Morton (Z-curve) order of cells of one diameter, and a random permutation.
+The 1,000-granule soft separator case scaled to N granules as in ``soft_scaling.py --family
+finer`` (radius 1.5 mm·√(1000/N)), built three times with the same granules in three row
+orders: the case's own (its placement), Morton (Z-curve) order of cells of one diameter, and a
+random permutation.
 Each simulation takes ``--warm`` untimed machine steps, then ``--blocks`` blocks of ``--steps``
 timed ones, the three interleaved block by block, one thread; medians of the blocks, in ns per
 granule-step (granule steps = machine steps x substeps x N).
