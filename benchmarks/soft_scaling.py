@@ -37,6 +37,7 @@ import ctypes
 import json
 import os
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -184,6 +185,11 @@ def main() -> None:
 
 def count_instructions(args: argparse.Namespace) -> None:
     """The instructions table (``--instructions``)."""
+    missing = [tool for tool in ("valgrind", "gcc") if shutil.which(tool) is None]
+    if not Path("/usr/include/valgrind/callgrind.h").exists():
+        missing.append("valgrind/callgrind.h")
+    if missing:
+        sys.exit(f"--instructions needs {', '.join(missing)}: apt-get install valgrind gcc")
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         (folder / "marks.c").write_text(MARKS_SOURCE)
