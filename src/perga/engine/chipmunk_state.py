@@ -14,6 +14,7 @@ so a pymunk whose layout differs is refused, never read wrongly.
 
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -23,7 +24,7 @@ import numpy as np
 import pymunk
 from llvmlite import ir
 from numba import types
-from numba.extending import intrinsic
+from numba.extending import intrinsic, overload
 from numpy.typing import NDArray
 from pymunk._chipmunk import ffi, lib
 
@@ -161,11 +162,16 @@ def _double_pointer(typingctx, address):
     return pointer(address), codegen
 
 
-@numba.njit(inline="always")
 def doubles_at(address: int, length: int) -> NDArray[np.float64]:
     """The ``length`` doubles at ``address`` (an entry of :meth:`_StructViews.addresses`) as a
-    writable array, in compiled code."""
-    return numba.carray(_double_pointer(address), (length,))
+    writable array: in compiled code a pointer (:func:`_doubles_at_compiled`), in Python (numba's
+    JIT off: mutation tests, debugging) through ctypes."""
+    return np.ctypeslib.as_array((ctypes.c_double * length).from_address(int(address)))
+
+
+@overload(doubles_at, inline="always")
+def _doubles_at_compiled(address, length):
+    return lambda address, length: numba.carray(_double_pointer(address), (length,))
 
 
 def raw_space_step(space: pymunk.Space) -> tuple[int, int] | None:
@@ -207,12 +213,17 @@ def _call_space_step(typingctx, function, space, dt):
     return types.none(function, space, dt), codegen
 
 
-@numba.njit(inline="always")
 def space_step(function: int, space: int, dt: float) -> None:
-    """Chipmunk's step of ``space`` by ``dt`` (internal time units) from compiled code: the
-    addresses of :func:`raw_space_step`; what pymunk's ``Space.step`` does while that gives
-    addresses (1.6 µs a call where ``Space.step`` takes 2.2, docs/performance.md)."""
-    _call_space_step(function, space, dt)
+    """Chipmunk's step of ``space`` by ``dt`` (internal time units) through the addresses of
+    :func:`raw_space_step`; what pymunk's ``Space.step`` does while that gives addresses (1.6 µs
+    a call from compiled code where ``Space.step`` takes 2.2, docs/performance.md). In Python
+    (numba's JIT off) through ctypes."""
+    ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_double)(int(function))(int(space), dt)
+
+
+@overload(space_step, inline="always")
+def _space_step_compiled(function, space, dt):
+    return lambda function, space, dt: _call_space_step(function, space, dt)
 
 
 VIEW_WIDTH = _BODY.stop - _BODY.start
