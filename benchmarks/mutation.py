@@ -135,6 +135,30 @@ def _cache_flags(
     }
 
 
+_THIRD_TOTAL = (
+    "a third total is never touched: meter_step adds to totals[0] and [1], the ledger reads those"
+)
+_NO_CONSTRAINTS = (
+    "_NO_LOSSES has no constraint rows: constraint_losses reads energy[0] and writes it back "
+    "unchanged, and reads none of its other arrays"
+)
+_IDLE_METER = (
+    "IDLE_METER goes only to compiled steps without a meter. Its terms flag is False, so "
+    "meter_step reads nothing of it past the losses; flagged True, its no pins and no bodies "
+    "add zero to totals of its own that nothing reads"
+)
+_THIRD_DOUBLE = (
+    "reads one more double of the pivot's struct (its bias, after jAcc); only j[0], j[1] are used"
+)
+
+
+def _same_reason(
+    module: str, line: int, text: str, reason: str, mutants: tuple[tuple[int, str], ...]
+) -> dict[tuple[str, int, int, str], tuple[str, str]]:
+    """EQUIVALENT entries for the ``mutants`` (column, operator#occurrence) of one line."""
+    return {(module, line, column, operator): (text, reason) for column, operator in mutants}
+
+
 _CACHE_FLAGS_LAWS = _cache_flags(
     "laws",
     '@njit(cache=True, inline="always", fastmath=FASTMATH)',
@@ -338,6 +362,76 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
         _ZIP_BODIES,
     ),
     **_CACHE_FLAGS_ENERGY,
+    **_same_reason(
+        "energy",
+        127,
+        "self._totals = np.zeros(2)",
+        _THIRD_TOTAL,
+        ((32, "NumberReplacer#16"),),
+    ),
+    **_same_reason(
+        "energy",
+        184,
+        (
+            "_NO_LOSSES = ((np.zeros(2), np.zeros(0,"
+            " dtype=np.uint64), np.zeros((0, 2), dtype=np.int64)),)"
+        ),
+        _NO_CONSTRAINTS,
+        (
+            (24, "NumberReplacer#34"),
+            (24, "NumberReplacer#35"),
+            (37, "NumberReplacer#36"),
+            (71, "NumberReplacer#40"),
+            (71, "NumberReplacer#41"),
+        ),
+    ),
+    **_same_reason(
+        "energy",
+        189,
+        (
+            "_NO_LOSSES, np.zeros((0, 2), dtype=np.int64),"
+            " np.zeros((0, 2)), np.zeros(0, dtype=np.uint64),"
+        ),
+        _IDLE_METER,
+        (
+            (26, "NumberReplacer#42"),
+            (29, "NumberReplacer#44"),
+            (29, "NumberReplacer#45"),
+            (60, "NumberReplacer#46"),
+            (63, "NumberReplacer#48"),
+            (63, "NumberReplacer#49"),
+            (77, "NumberReplacer#50"),
+        ),
+    ),
+    **_same_reason(
+        "energy",
+        190,
+        (
+            "np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0),"
+            " 0.0, 0.0, False, False, np.zeros(2),"
+        ),
+        _IDLE_METER,
+        (
+            (13, "NumberReplacer#52"),
+            (42, "NumberReplacer#54"),
+            (55, "NumberReplacer#56"),
+            (59, "NumberReplacer#58"),
+            (59, "NumberReplacer#59"),
+            (64, "NumberReplacer#60"),
+            (64, "NumberReplacer#61"),
+            (69, "ReplaceFalseWithTrue#0"),
+            (76, "ReplaceFalseWithTrue#1"),
+            (92, "NumberReplacer#62"),
+            (92, "NumberReplacer#63"),
+        ),
+    ),
+    **_same_reason(
+        "energy",
+        297,
+        "j = doubles_at(impulses[k], 2)",
+        _THIRD_DOUBLE,
+        ((36, "NumberReplacer#170"),),
+    ),
     ("laws", 54, 11, "NumberReplacer#2"): (
         "N_PARAMS = 8",
         (
