@@ -159,17 +159,24 @@ def _write_torque(addresses, torque):
     return old
 
 
-def test_addresses_reach_the_struct_and_are_taken_again_after_pickling():
-    """Compiled code reads and writes a body through its view's address; a pickled copy's
-    addresses are those of the copy's bodies, not the original's."""
+PATHS = {"compiled": lambda f: f, "python": lambda f: f.py_func}
+"""Compiled code, and the same function as plain Python (as with numba's JIT off: the mutation
+runs), where ``doubles_at`` and ``space_step`` go through ctypes."""
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_addresses_reach_the_struct_and_are_taken_again_after_pickling(path):
+    """Code reads and writes a body through its view's address; a pickled copy's addresses
+    are those of the copy's bodies, not the original's."""
+    write_torque = PATHS[path](_write_torque)
     space = hinged_hammer()
     body = hammer_of(space)
     body.torque = 1.5
     views = BodyViews([body])
-    assert _write_torque(views.addresses(), 2.5) == 1.5
+    assert write_torque(views.addresses(), 2.5) == 1.5
     assert body.torque == 2.5
     copy_space, copy = pickle.loads(pickle.dumps((space, views)))
-    assert _write_torque(copy.addresses(), 7.0) == 2.5
+    assert write_torque(copy.addresses(), 7.0) == 2.5
     assert hammer_of(copy_space).torque == 7.0 and body.torque == 2.5
 
 
@@ -179,13 +186,15 @@ def _steps(function: int, space: int, dt: float, n: int) -> None:
         chipmunk_state.space_step(function, space, dt)
 
 
-def test_the_space_stepped_from_compiled_code_steps_as_pymunk_does() -> None:
-    """The hinged hammer stepped 200 times by ``cpSpaceStep`` from compiled code and by
-    ``Space.step``: the same floats in every body and joint."""
+@pytest.mark.parametrize("path", PATHS)
+def test_the_space_stepped_through_its_address_steps_as_pymunk_does(path) -> None:
+    """The hinged hammer stepped 200 times by ``cpSpaceStep`` through its address (from
+    compiled code, or through ctypes) and by ``Space.step``: the same floats in every body and
+    joint."""
     ours, theirs = hinged_hammer(), hinged_hammer()
     raw = chipmunk_state.raw_space_step(ours)
     assert raw is not None
-    _steps(*raw, 0.01, 200)
+    PATHS[path](_steps)(*raw, 0.01, 200)
     for _ in range(200):
         theirs.step(0.01)
     a, b = capture(ours), capture(theirs)
