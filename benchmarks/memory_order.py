@@ -20,16 +20,14 @@ import dataclasses
 import os
 import statistics
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
+from soft_scaling import CASE, overrides
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
-
-CASE = Path(__file__).resolve().parents[1] / "benchmarks/cases/soft-separator-1000.toml"
 
 
 def morton_order(points: np.ndarray, cell: float) -> np.ndarray:
@@ -49,9 +47,8 @@ def morton_order(points: np.ndarray, cell: float) -> np.ndarray:
 
 def measure(n: int, warm: int, blocks: int, steps: int) -> dict[str, float]:
     """ns per granule-step of each order at ``n`` granules."""
-    radius = 0.0015 * (1000 / n) ** 0.5
-    overrides = [f"granules.count={n}", f"granules.radius={radius}", "solver.threads=1"]
-    spec = scene_spec(load_case(CASE, overrides=overrides))
+    spec = scene_spec(load_case(CASE, overrides=[*overrides("finer", n), "solver.threads=1"]))
+    radius = spec.granules[0].radius
     points = np.array([g.position for g in spec.granules])
     orders = {
         "case": np.arange(n),
