@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from trees import worktree
+
 ROOT = Path(__file__).resolve().parents[1]
 CASES = {
     "soft-separator": (ROOT / "cases/soft-separator.toml", 0.5),
@@ -121,21 +123,6 @@ def measure(source: Path, case: Path, duration: float) -> dict[str, float]:
     if result["status"] != "completed":
         raise RuntimeError(f"{case} with {source}: {result['status']}")
     return result
-
-
-def worktree(ref: str) -> Path:
-    """A temporary checkout of ``ref``; returns its src/ folder."""
-    sha = subprocess.run(
-        ["git", "-C", str(ROOT), "rev-parse", "--short", ref],
-        capture_output=True, text=True, check=True,
-    ).stdout.strip()  # fmt: skip
-    path = Path(tempfile.gettempdir()) / f"perga-{sha}"
-    if not path.exists():
-        subprocess.run(
-            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(path), sha],
-            capture_output=True, check=True,
-        )  # fmt: skip
-    return path / "src"
 
 
 def main() -> None:
