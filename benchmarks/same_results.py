@@ -1,7 +1,7 @@
 """Every bundled scene run whole in this tree and in another commit, and their outputs compared
 byte for byte: every table, ParaView series (``.pvd``) and frame (``.vtu``), scene.json, the
-case copy, and summary.json but for what a run measures of itself or its paths (wall time, steps per second,
-the case's path, the threads used).
+case copy, and summary.json but for what a run measures of itself or takes from where it ran
+(wall time, steps per second, the case's path, the threads used).
 
 Both trees run the same case files (this tree's ``cases/``) in a fresh subprocess each
 (``perga run``, the other tree's ``src/`` first on the path), one after the other.
