@@ -81,7 +81,7 @@ ITERATIONS = 10
 # 18 m/s, struck granules up to (1 + e) · 18 m/s)
 DT = 5e-5  # s
 
-# perga's internal units (perga.engine.units), repeated so that the bare scene owes perga nothing
+# perga's internal units (perga.machine.units), repeated so that the bare scene owes perga nothing
 LENGTH, TIME, MASS = 1e-3, 1e-3, 1e-3
 SLOP = 1e-5  # m
 

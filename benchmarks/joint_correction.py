@@ -1,5 +1,5 @@
 """Issue 15, item 2: how much of the energy ledger's residual is the pivot joints' correction
-work. Per step, each pivot's accumulated impulse J (read raw, ``perga.engine.chipmunk_state``)
+work. Per step, each pivot's accumulated impulse J (read raw, ``perga.machine.chipmunk_state``)
 times the mean relative velocity of its two anchors, v̄_b − v̄_a (each body's velocity before and
 after the step at the lever arm of the step's new positions, where Chipmunk applies the
 impulse): the energy the joint's position correction puts in (or takes out). An ideal hinge does
@@ -18,9 +18,9 @@ from pathlib import Path
 import pymunk
 
 from perga.case import load_case
-from perga.engine import units as u
-from perga.engine.chipmunk_state import JointImpulses
 from perga.engine.simulation import Simulation
+from perga.machine import units as u
+from perga.machine.chipmunk_state import JointImpulses
 from perga.model.from_case import scene_spec
 
 

@@ -66,11 +66,11 @@ MODULES = {
     "records": Module(
         "src/perga/model/records.py",
         (
-            "tests/engine/test_energy.py",
+            "tests/machine/test_energy.py",
             "tests/engine/test_process.py::test_an_impact_carries_its_specific_energy",
         ),
     ),
-    "energy": Module("src/perga/engine/energy.py", ("tests/engine/test_energy.py",)),
+    "energy": Module("src/perga/machine/energy.py", ("tests/machine/test_energy.py",)),
 }
 
 # Operators (cosmic-ray's names, regexes matched at the start): the arithmetic operator replaced

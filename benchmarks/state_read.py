@@ -1,4 +1,4 @@
-"""Cost of reading granule state: ``perga.engine.batch.BodyReader`` (pymunk.batch)
+"""Cost of reading granule state: ``perga.machine.batch.BodyReader`` (pymunk.batch)
 against the
 per-body Python loop of ``Simulation.granule_positions`` & co.
 
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from perga.engine import Simulation
-from perga.engine.batch import BodyReader
+from perga.machine.batch import BodyReader
 
 sys.path.insert(0, str(Path(__file__).parent))
 from engine_vs_pymunk import perga_spec

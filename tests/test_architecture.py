@@ -18,8 +18,9 @@ ALLOWED: dict[str, set[str]] = {
     "geometry": {"geometry"},
     "case": {"case", "analytic", "geometry"},
     "model": {"model", "case", "analytic", "geometry"},
-    "engine": {"engine", "model", "analytic", "geometry", "contact", "contact.protocol"},
-    "contact": {"contact", "engine", "model", "analytic", "geometry", "cores"},
+    "machine": {"machine", "model", "analytic", "geometry"},
+    "contact": {"contact", "machine", "model", "analytic", "geometry", "cores"},
+    "engine": {"engine", "machine", "model", "analytic", "geometry", "contact", "contact.protocol"},
     "output": {"output", "model", "geometry", "analytic"},
     "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
@@ -34,14 +35,19 @@ ALLOWED: dict[str, set[str]] = {
     "cores": set(),
     "__init__": set(),
 }  # fmt: skip
-"""Part -> the parts it may import. ``engine`` may import the contact-model registry
-(``perga.contact``) and its protocol, never a contact model; ``contact`` may import the engine's
-machine; ``case``, ``stats`` and ``output`` never import the engine or a contact model; nothing
-imports the CLI."""
+"""Part -> the parts it may import. The machine (rotor, hammers, joints, effects, the meter) is
+below the contact models: it never imports a contact model or the simulation; a contact model
+imports the machine, never the simulation (``engine``) and never another contact model
+(:data:`CONTACT_MODELS`); the ``engine`` (the simulation) imports the machine and the contact
+registry (``perga.contact``) and its protocol, never a contact model; ``case``, ``stats`` and
+``output`` never import the machine, the engine or a contact model; nothing imports the CLI."""
+
+CONTACT_MODELS = {"contact.rigid", "contact.soft"}
+"""The contact models (:data:`perga.contact.MODELS`' implementations): none imports another."""
 
 
 def part_of(module: str) -> str:
-    """The part a module belongs to: perga.engine.machine -> engine, perga.cli -> cli."""
+    """The part a module belongs to: perga.machine.machine -> engine, perga.cli -> cli."""
     return module.split(".")[1] if module.count(".") else "__init__"
 
 
@@ -57,7 +63,7 @@ def module_named(name: str) -> str:
 
 
 def imported_part(name: str) -> str:
-    """The part an import reaches: perga.engine.units -> engine; inside perga.contact the
+    """The part an import reaches: perga.machine.units -> engine; inside perga.contact the
     registry (contact), its protocol (contact.protocol) and each model (contact.rigid,
     contact.soft) are told apart."""
     parts = module_named(name).split(".")[1:]
@@ -97,13 +103,18 @@ def modules() -> list[tuple[Path, str]]:
 
 
 def violations(found: list[tuple[str, int, str]]) -> list[str]:
-    """The imports among (module, line, imported name) that break :data:`ALLOWED`. A part may
-    always import itself; the engine only the contact registry and protocol by name, the
-    other parts any of perga.contact where they may import "contact"."""
+    """The imports among (module, line, imported name) that break :data:`ALLOWED` or
+    :data:`CONTACT_MODELS`. A part may always import itself but a contact model another; the
+    engine only the contact registry and protocol by name, the other parts any of
+    perga.contact where they may import "contact"."""
     bad = []
     for module, line, name in found:
         source, target = part_of(module), imported_part(name)
         allowed = ALLOWED[source]
+        model = imported_part(module)
+        if model in CONTACT_MODELS and target in CONTACT_MODELS - {model}:
+            bad.append(f"{module}:{line} imports {name} (a contact model imports another)")
+            continue
         own = target.split(".")[0] == source
         by_prefix = source != "engine" and target.split(".")[0] in allowed
         if own or target in allowed or by_prefix:
@@ -112,10 +123,60 @@ def violations(found: list[tuple[str, int, str]]) -> list[str]:
     return bad
 
 
+def cycles(found: list[tuple[str, int, str]]) -> list[list[str]]:
+    """The import circles between parts (a contact model, the contact registry and its
+    protocol each a part of its own), from (module, line, imported name): each circle once, as
+    the parts in order, the first again at the end."""
+    graph: dict[str, set[str]] = {}
+    for module, _, name in found:
+        source, target = imported_part(module), imported_part(name)
+        if source != target:
+            graph.setdefault(source, set()).add(target)
+    out, seen = [], set()
+
+    def walk(node: str, path: list[str]) -> None:
+        for nxt in sorted(graph.get(node, ())):
+            if nxt in path:
+                circle = path[path.index(nxt) :]
+                key = frozenset(circle)
+                if key not in seen:
+                    seen.add(key)
+                    out.append([*circle, nxt])
+            elif len(path) < len(graph) + 1:
+                walk(nxt, [*path, nxt])
+
+    for start in sorted(graph):
+        walk(start, [start])
+    return out
+
+
+def every_import() -> list[tuple[str, int, str]]:
+    """(module, line, imported name) of every perga import in the package."""
+    return [(m, line, name) for path, m in modules() for line, name in imports(path, m)]
+
+
 def test_import_rules_hold() -> None:
-    found = [(m, line, name) for path, m in modules() for line, name in imports(path, m)]
+    found = every_import()
     assert len(found) > 200  # the scan sees the package
     assert violations(found) == []
+
+
+def test_no_import_circle_between_parts() -> None:
+    assert cycles(every_import()) == []
+
+
+def test_a_circle_is_seen() -> None:
+    """The circle check fails where there is one: the engine's imports of the machine, and a
+    machine module importing the simulation back (through a third part, too)."""
+    found = [
+        ("perga.engine.simulation", 1, "perga.machine.machine.Machine"),
+        ("perga.machine.energy", 1, "perga.engine.simulation.Simulation"),
+        ("perga.model.frame", 1, "perga.case.schema.Case"),
+    ]
+    assert cycles(found) == [["engine", "machine", "engine"]]
+    found += [("perga.case.load", 1, "perga.output.tables.read_columns"),
+              ("perga.output.tables", 1, "perga.model.frame.Frame")]  # fmt: skip
+    assert ["case", "output", "model", "case"] in cycles(found)
 
 
 @pytest.mark.parametrize(
@@ -124,10 +185,15 @@ def test_import_rules_hold() -> None:
         ("perga.analytic.paper", "perga.engine.simulation"),
         ("perga.engine.simulation", "perga.contact.soft.model"),
         ("perga.engine.simulation", "perga.contact.rigid.bodies"),
-        ("perga.output.vtk", "perga.engine.machine"),
+        ("perga.output.vtk", "perga.machine.machine"),
+        ("perga.machine.effects", "perga.contact.protocol.GranuleState"),
+        ("perga.machine.machine", "perga.engine.simulation.Simulation"),
+        ("perga.contact.rigid.outline", "perga.contact.soft.polygon_set"),
+        ("perga.contact.soft.model", "perga.contact.rigid.bodies"),
+        ("perga.contact.soft.model", "perga.engine.simulation.Simulation"),
         ("perga.output.vtk", "perga.contact.soft.polygon_set"),
         ("perga.case.checks", "perga.model.spec"),
-        ("perga.stats.energy", "perga.engine.energy"),
+        ("perga.stats.energy", "perga.machine.energy"),
         ("perga.runner", "perga.contact.rigid.model"),
         ("perga.studies.compare", "perga.cli"),
         ("perga.model.frame", "perga.output.tables"),
@@ -143,7 +209,9 @@ def test_the_rules_catch_a_forbidden_import(module: str, name: str) -> None:
     [
         ("perga.engine.simulation", "perga.contact.contact_model"),
         ("perga.engine.simulation", "perga.contact.protocol.ContactModel"),
-        ("perga.contact.soft.model", "perga.engine.machine.Machine"),
+        ("perga.contact.soft.model", "perga.machine.machine.Machine"),
+        ("perga.contact.soft.model", "perga.contact.protocol.GranuleState"),
+        ("perga.engine.simulation", "perga.machine.compiled.compiled_machine"),
         ("perga.runner", "perga.engine.simulation"),
         ("perga.output.vtk", "perga.model.frame"),
     ],
@@ -169,11 +237,11 @@ def test_no_isinstance_on_a_simulation_or_contact_model() -> None:
 
 
 RAW_C_POINTERS = {
-    "perga.engine.chipmunk_state": {
+    "perga.machine.chipmunk_state": {
         "_body", "_constraint", "_space", "_handlers", "_add_later", "_remove_later",
         "_post_step_callbacks", "_bodies_to_check",
     },
-    "perga.engine.batch": {"_space", "_float_arr", "_int_arr"},
+    "perga.machine.batch": {"_space", "_float_arr", "_int_arr"},
 }  # fmt: skip
 """The two exceptions, pymunk's C pointers, which pymunk offers no public way to reach: the module
 that reads what pymunk's pickle misses through the bodies' and joints' pointers (every read
@@ -213,3 +281,25 @@ def test_a_run_does_not_load_the_mesh_libraries() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout
     assert out.strip() == "[]"
+
+
+def contact_parts_loaded(case: Path) -> list[str]:
+    """The parts of perga.contact a fresh interpreter has loaded after building ``case``'s
+    simulation and stepping it three times."""
+    code = (
+        "import sys; from perga.case import load_case; from perga.engine import Simulation;"
+        "from perga.model.from_case import scene_spec;"
+        f"sim = Simulation(scene_spec(load_case({str(case)!r}))); sim.run(3 * sim.dt);"
+        "print(' '.join(sorted({m.split('.')[2] for m in sys.modules"
+        " if m.startswith('perga.contact.')})))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return out.stdout.split()
+
+
+def test_a_rigid_run_does_not_load_the_kernel() -> None:
+    """A rigid simulation loads the rigid model and the protocol, never perga.contact.soft (the
+    numba kernel); a soft one is seen to load it (the check can fail)."""
+    cases = Path(__file__).resolve().parents[1] / "cases"
+    assert contact_parts_loaded(cases / "separator.toml") == ["protocol", "rigid"]
+    assert "soft" in contact_parts_loaded(cases / "soft-separator.toml")

@@ -99,7 +99,7 @@ def test_granule_outside_the_wall_stops_the_run_with_a_diagnostic(tmp_path):
 
 def test_separator_energy_ledger_closes_within_one_percent(tmp_path):
     # the target: drive work in = ΔKE + contact dissipation + friction + drag to <= 1 %,
-    # each term measured on its own (engine/energy.py); 0.28 % measured at the case's dt = 4e-5 s
+    # each term measured on its own (machine/energy.py); 0.28 % measured at the case's dt = 4e-5 s
     out = tmp_path / "separator"
     separator = ROOT / "cases" / "separator.toml"
     assert main(["run", str(separator), "-o", str(out), "--quiet"]) == 0

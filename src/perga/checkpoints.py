@@ -3,7 +3,7 @@ kept, for ``perga run --resume RUN``.
 
 A checkpoint holds the simulation, pickled (the machine's Pymunk space with its cached contacts
 and the Chipmunk state that pymunk's pickling does not carry exactly, which the machine adds
-(:mod:`perga.engine.chipmunk_state`); the contact model's arrays with their tangential springs
+(:mod:`perga.machine.chipmunk_state`); the contact model's arrays with their tangential springs
 and neighbour lists, the process's random-number state, the impacts so far, the energy meter),
 and what the runner hands over (the recorders with their files' lengths, the frame clock, the
 summary so far).

@@ -404,10 +404,11 @@ class _Run:
         """Step to the end, frames as they fall due, checkpoints on their grid; the summary's
         status says how it ended."""
         report_every = max(1, self.n_steps // 200)
-        with _ending(summary), self.sim.contacts.running():
+        with _ending(summary), self.sim.running():
             while self.sim.steps < self.n_steps:
                 sim = self.sim
-                sim.advance(self._steps_to_look(report_every if progress else 0))
+                sim.advance_to(sim.steps + self._steps_to_look(report_every if progress else 0),
+                               stop.check)  # fmt: skip
                 stop.check()
                 last = sim.steps == self.n_steps
                 if self.frames.due(sim.time) or last:

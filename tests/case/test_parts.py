@@ -16,12 +16,12 @@ from perga.case import CaseError, load_case
 from perga.cli import main
 from perga.contact.soft.machine import MachinePolygons
 from perga.engine import Simulation
-from perga.engine.machine import build_machine
 from perga.geometry.disc_polygon import CORNER, SMOOTH_JOINT
 from perga.geometry.outline import read_outline
 from perga.geometry.polygon import signed_area
 from perga.geometry.units import GeometryError
 from perga.geometry.wall import circumscribed, wall_pieces
+from perga.machine.machine import build_machine
 from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
 from perga.model.from_case import scene_spec
 from perga.model.spec import ChamberSpec, RigidContactSpec, SoftContactSpec

@@ -1,6 +1,6 @@
 """A simulation copied (``copy.deepcopy``) or pickled and read back steps as the original. The
 machine carries Chipmunk's state that pymunk's pickle misses (``Machine.__getstate__``,
-``perga.engine.chipmunk_state``): without it a hinged hammer comes back displaced and its
+``perga.machine.chipmunk_state``): without it a hinged hammer comes back displaced and its
 joints start cold (the soft separator's copied granules were up to 0.27 m from the original's
 3,000 steps later)."""
 
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from perga.case import load_case
-from perga.engine.chipmunk_state import capture
 from perga.engine.simulation import Simulation
+from perga.machine.chipmunk_state import capture
 from perga.model.from_case import scene_spec
 
 CASES = Path(__file__).resolve().parents[2] / "cases"

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from perga.case import CaseError, load_case
 from perga.engine import Simulation
-from perga.engine import units as u
+from perga.machine import units as u
 from perga.model.from_case import scene_spec
 
 CASE = """

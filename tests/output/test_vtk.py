@@ -28,7 +28,7 @@ import perga
 from perga.case import load_case
 from perga.contact.soft.polygon_set import HIST_ACTIVE
 from perga.engine import Simulation
-from perga.engine import units as u
+from perga.machine import units as u
 from perga.model import ContactSpec
 from perga.model.from_case import scene_spec
 from perga.model.spec import SceneSpec

@@ -624,7 +624,7 @@ class Solver(Strict):
         description="the largest |closure| of the energy ledger at the end (its residual over "
         "the energy in play, a fraction: 0.01 is 1 %) with which a run counts as completed, "
         "in [1e-6, 1]; beyond it the run ends 'completed, ledger off' with exit status 3 "
-        "(perga.engine.energy)",
+        "(perga.machine.energy)",
     )
     threads: int | Literal["auto"] = Field(
         "auto",

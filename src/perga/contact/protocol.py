@@ -9,7 +9,7 @@ simulation calls, in this order (:mod:`perga.engine.simulation` has the whole st
 1. the effects' kicks on :attr:`ContactModel.kinematics` (but one the model took over,
    :meth:`GranuleKinematics.take_floor_kick`);
 2. :meth:`ContactModel.before_machine_step`, with the machine's state
-   (:class:`~perga.engine.machine.MachineState`, internal units), which applies a kick it took
+   (:class:`~perga.machine.machine.MachineState`, internal units), which applies a kick it took
    over first;
 3. Chipmunk's step of the space;
 4. :meth:`ContactModel.after_machine_step`, with the state after it, which returns the angular
@@ -23,7 +23,7 @@ Between steps the process (a feed, an outlet, damage) may add and remove granule
 persistent number (its id), which impacts, releases and frames name.
 
 Everything is in SI at this interface except the kicks' arrays and that angular impulse, which
-are in Chipmunk's internal units (:mod:`perga.engine.units`), as the effects and the meter
+are in Chipmunk's internal units (:mod:`perga.machine.units`), as the effects and the meter
 compute in them.
 """
 
@@ -32,51 +32,18 @@ from __future__ import annotations
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from perga.machine.compiled import CompiledMachine
+from perga.machine.effects import GranuleKinematics
+from perga.machine.machine import MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
-if TYPE_CHECKING:
-    from perga.engine.effects import FloorKick
-    from perga.engine.machine import MachineState
-    from perga.engine.simulation import CompiledMachine
-
 FloatArray = NDArray[np.float64]
-
-
-class GranuleKinematics(Protocol):
-    """All granules' velocities, read and written at once for the effects' kicks, rows in the
-    spec's granule order, in the model's own units with the factors to Chipmunk's internal units
-    (mm/ms; positions mm): an internal value is the array's divided by its unit."""
-
-    @property
-    def count(self) -> int:
-        """Number of granules."""
-        ...
-
-    def constants(self) -> tuple[FloatArray, FloatArray]:
-        """The granules' masses (kg) and radii (m), rows as the velocities' (read only: they
-        may be the model's own arrays)."""
-        ...
-
-    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
-        """Velocities (n, 2), positions (n, 2) if asked for (else None), and the internal
-        velocity and length units in the arrays' units: the model's own arrays or fresh ones."""
-        ...
-
-    def write_velocities(self, velocities: FloatArray) -> None:
-        """Set every granule's velocity from ``velocities`` (n, 2), as :meth:`read` gave them."""
-        ...
-
-    def take_floor_kick(self, kick: FloorKick) -> bool:
-        """Whether the model takes floor friction's kick over: it then applies ``kick`` at the
-        start of :meth:`ContactModel.before_machine_step`, with the rotor's angular velocity of
-        the state it is given, instead of the effects' runner before it."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -152,7 +119,7 @@ class ContactModel(Protocol):
         ...
 
     def energy_terms(self) -> LedgerTerms:
-        """The ledger terms the model measures (see :mod:`perga.engine.energy`), J."""
+        """The ledger terms the model measures (see :mod:`perga.machine.energy`), J."""
         ...
 
     def granule_state(self) -> GranuleState:

@@ -6,10 +6,10 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
 ``SceneSpec.granule_dt`` inside it):
 
 1. Kicks: only if the spec lists them, floor friction and air drag change all granules'
-   velocities at once from (x_n, v_n) (:mod:`perga.engine.effects`): an operator split before
+   velocities at once from (x_n, v_n) (:mod:`perga.machine.effects`): an operator split before
    everything else, so the contacts and the drift see the kicked velocities. A contact model
    that takes floor friction over (the soft one) applies it first thing in 2 instead.
-2. The machine's state is read (:meth:`~perga.engine.machine.Machine.state`: rotor and hammer
+2. The machine's state is read (:meth:`~perga.machine.machine.Machine.state`: rotor and hammer
    bodies, read raw from their structs), and handed to the contact model's work before the
    machine moves (:meth:`~perga.contact.protocol.ContactModel.before_machine_step`): rigid,
    nothing moves yet (the granules are bodies of the space: their velocities are read for the
@@ -27,7 +27,7 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
    rotor-driven bodies, which the meter needs for the drive's work.
 6. The meter balances the rotor-driven bodies' angular momentum and books the constraint
    effects' losses (hinge friction, swing stops) from the two states
-   (:mod:`perga.engine.energy`).
+   (:mod:`perga.machine.energy`).
 7. The step counter is incremented; ``time`` is n·dt from the integer count (no drift).
 8. The process, if the system has one (:mod:`perga.engine.process`): with damage the step's
    new impacts get their breakage (each carries its specific energy from its making);
@@ -46,38 +46,26 @@ contact model offers it and nothing of the step needs Python (docs/architecture.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 
 import numpy as np
 from numpy.typing import NDArray
 
 from perga.contact import contact_model
 from perga.contact.protocol import ContactModel
-from perga.engine import units as u
-from perga.engine.effects import KickRunner
-from perga.engine.energy import IDLE_METER, EnergyMeter
-from perga.engine.machine import Machine, build_machine
 from perga.engine.process import Damage, Feed, Outlet
 from perga.geometry.clearance import Obstacles
+from perga.machine import units as u
+from perga.machine.compiled import CompiledMachine, compiled_machine
+from perga.machine.effects import KickRunner
+from perga.machine.energy import EnergyMeter
+from perga.machine.machine import Machine, build_machine
 from perga.model.frame import Frame, GranuleFrame, frozen
 from perga.model.records import EnergyLedger, Events, Impact
 from perga.model.spec import GranuleSpec, SceneSpec
 
 FloatArray = NDArray[np.float64]
-
-
-class CompiledMachine(NamedTuple):
-    """The machine's part of a step for compiled code that takes whole steps itself
-    (:meth:`~perga.contact.protocol.ContactModel.machine_steps`): ``raw`` Chipmunk's step and
-    the state read (:meth:`~perga.engine.machine.Machine.raw_step`), ``meter`` the energy
-    meter's step (:meth:`~perga.engine.energy.EnergyMeter.compiled`; booked if ``metered``),
-    ``before`` and ``after`` the machine-state tables the steps read into."""
-
-    raw: tuple
-    metered: bool
-    meter: tuple
-    before: FloatArray
-    after: FloatArray
 
 
 class Simulation:
@@ -174,18 +162,7 @@ class Simulation:
         """The machine's part of steps for :meth:`advance`, or None where a step needs Python."""
         if self.kicks is not None or self.feed is not None or self.outlet is not None:
             return None
-        raw = self.machine.raw_step(self._dt_internal)
-        if raw is None:
-            return None
-        table = (len(raw[3]), 6)
-        meter = self.meter
-        return CompiledMachine(
-            raw,
-            meter is not None,
-            IDLE_METER if meter is None else meter.compiled(self._dt_internal),
-            np.empty(table),
-            np.empty(table),
-        )
+        return compiled_machine(self.machine, self.meter, self._dt_internal)
 
     def _process(self, time: float) -> None:
         """Step 8 of the order (module doc)."""
@@ -249,15 +226,29 @@ class Simulation:
         """Whether granule ``id_`` broke (drawn; False without damage)."""
         return self.damage is not None and id_ in self.damage.broken
 
+    def running(self) -> AbstractContextManager[None]:
+        """A context to hold around many steps: what the steps use that is costly to set up at
+        each (the contact model's, :meth:`~perga.contact.protocol.ContactModel.running`)."""
+        return self.contacts.running()
+
+    def advance_to(self, step: int, between: Callable[[], None] | None = None) -> None:
+        """Advance to step ``step`` (>= the step now), the floats of as many :meth:`step` calls,
+        calling ``between()`` after each :meth:`advance` short of it (a driver's safe point,
+        e.g. for a stop signal); hold :meth:`running` around many calls."""
+        if step < self.steps:
+            raise ValueError(f"step {step} is before the simulation's step {self.steps}")
+        while self.steps < step:
+            self.advance(step - self.steps)
+            if between is not None and self.steps < step:
+                between()
+
     def run(self, duration: float) -> int:
         """Advance by ``duration`` (s), rounded to a whole number of steps; returns the count."""
         if not (math.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration must be finite and >= 0 s (got {duration})")
-        start = self.steps
         n = round(duration / self.dt)
-        with self.contacts.running():
-            while self.steps < start + n:
-                self.advance(start + n - self.steps)
+        with self.running():
+            self.advance_to(self.steps + n)
         return n
 
     def energy(self) -> EnergyLedger:

@@ -70,3 +70,21 @@ def piece_features(
             elif -SMOOTH_TURN < angle <= 0:
                 corner[at] = (*ends, SMOOTH_JOINT)
     return solid, corner
+
+
+def outline_arrays(
+    pieces: list[np.ndarray], loops: list[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(vertices, start, solid, corner) of the convex ``pieces`` of one body whose outline is
+    ``loops`` (:func:`piece_features`): what :func:`perga.geometry.disc_polygon.closest_feature`
+    takes after the point; piece k owns ``vertices[start[k]:start[k + 1]]``."""
+    polygons = [np.ascontiguousarray(p, dtype=np.float64) for p in pieces]
+    start = np.zeros(len(polygons) + 1, dtype=np.int64)
+    start[1:] = np.cumsum([len(p) for p in polygons])
+    solid, corner = piece_features(polygons, loops)
+    return (
+        np.ascontiguousarray(np.concatenate(polygons)),
+        start,
+        np.ascontiguousarray(solid, dtype=np.int8),
+        np.ascontiguousarray(corner, dtype=np.int64),
+    )

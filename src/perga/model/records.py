@@ -116,7 +116,7 @@ class EnergyLedger:
     """Cumulative energy terms since t = 0, J (SI); ``closure`` is dimensionless.
 
     The terms, the residual, the energy in play and the closure are defined in
-    :mod:`perga.engine.energy`."""
+    :mod:`perga.machine.energy`."""
 
     kinetic: float
     """Current kinetic energy of all moving bodies and granules (translation and rotation)."""

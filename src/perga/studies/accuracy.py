@@ -12,7 +12,7 @@ impact log and energy meter on, as ``perga run`` records them) gives:
 
 Errors (dimensionless, relative): restitution |e_sim/e − 1|; blade exit speed |v/v_exact − 1|;
 hinged impact |v_g − v_g,exact|/|v_g,exact|; trajectory max_t |y(t) − y_ref(t)|/drop height;
-energy ledger |closure| (:mod:`perga.engine.energy`).
+energy ledger |closure| (:mod:`perga.machine.energy`).
 """
 
 from __future__ import annotations
@@ -110,12 +110,11 @@ class Stepper:
 
     def run_to(self, steps: int) -> None:
         """Timed steps until the simulation has taken ``steps`` in all, as a run takes them
-        (``Simulation.advance``: whole steps compiled where the case allows)."""
+        (``Simulation.advance_to``: whole steps compiled where the case allows)."""
         sim = self.sim
         start = time.perf_counter()
-        with sim.contacts.running():
-            while sim.steps < steps:
-                sim.advance(steps - sim.steps)
+        with sim.running():
+            sim.advance_to(steps)
         self.wall += time.perf_counter() - start
 
 

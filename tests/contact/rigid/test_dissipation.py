@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from tests.engine.helpers import plate
 
-from perga.engine import Simulation, units
+from perga.engine import Simulation
+from perga.machine import units
 from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
 
 R_G = 0.002

@@ -9,7 +9,8 @@ import pytest
 from tests.engine.helpers import plate, rectangle
 
 from perga.analytic.impact import hinged_impact, normal_impact
-from perga.engine import Simulation, units
+from perga.engine import Simulation
+from perga.machine import units
 from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 
 # A single rigid impact is one impulse solve: Chipmunk's restitution target is exact, so the

@@ -18,8 +18,8 @@ from perga.contact.soft.polygon_set import (
     contact_table,
     polygon_set,
 )
-from perga.engine import units as u
-from perga.engine.effects import FloorKick
+from perga.machine import units as u
+from perga.machine.effects import FloorKick
 
 from .test_polygons import _box, _hexagon
 

@@ -1,4 +1,4 @@
-"""Floor friction taken over by the soft kernel (``perga.engine.effects.FloorKick``): the kernel
+"""Floor friction taken over by the soft kernel (``perga.machine.effects.FloorKick``): the kernel
 call applies the kick and keeps the impact log's start state itself, with the same floats as
 the effects' runner before the call did."""
 
@@ -9,8 +9,8 @@ import pytest
 
 from perga.case import load_case
 from perga.contact.soft.model import _Kinematics
-from perga.engine.effects import AirDrag, FloorFriction
 from perga.engine.simulation import Simulation
+from perga.machine.effects import AirDrag, FloorFriction
 from perga.model.from_case import scene_spec
 
 CASE = Path(__file__).resolve().parents[3] / "cases/soft-separator.toml"

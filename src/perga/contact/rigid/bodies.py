@@ -29,8 +29,8 @@ from typing import Any, Literal
 
 import pymunk
 
-from perga.engine import units as u
-from perga.engine.machine import HAMMER_GROUP, Machine
+from perga.machine import units as u
+from perga.machine.machine import HAMMER_GROUP, Machine
 from perga.model.spec import GranuleSpec
 
 Kind = Literal["granule", "hammer", "wall"]

@@ -60,8 +60,8 @@ import numpy as np
 import pymunk.batch as pb
 from numpy.typing import NDArray
 
-from perga.engine.batch import BodyReader
-from perga.engine.machine import Machine
+from perga.machine.batch import BodyReader
+from perga.machine.machine import Machine
 
 _B = pb.BodyFields
 _A = pb.ArbiterFields

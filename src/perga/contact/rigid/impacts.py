@@ -18,7 +18,7 @@ from dataclasses import replace
 import pymunk
 
 from perga.contact.rigid.bodies import RigidBodies
-from perga.engine import units as u
+from perga.machine import units as u
 from perga.model.records import HammerState, Impact
 
 

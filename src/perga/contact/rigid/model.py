@@ -36,15 +36,15 @@ from perga.contact.rigid.dissipation import ArbiterMeter
 from perga.contact.rigid.impacts import ImpactRecorder
 from perga.contact.rigid.outline import OutlineFilter
 from perga.contact.rigid.wall_bounce import wall_bounce
-from perga.engine import units as u
-from perga.engine.batch import BodyReader, BodyWriter
-from perga.engine.effects import FloorKick
-from perga.engine.machine import Machine, MachineState
+from perga.machine import units as u
+from perga.machine.batch import BodyReader, BodyWriter
+from perga.machine.effects import FloorKick
+from perga.machine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
 if TYPE_CHECKING:
-    from perga.engine.simulation import CompiledMachine
+    from perga.machine.compiled import CompiledMachine
 
 
 class _Kinematics:

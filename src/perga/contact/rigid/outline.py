@@ -18,17 +18,16 @@ from typing import Any
 import numpy as np
 import pymunk
 
-from perga.contact.soft.polygon_set import KINEMATIC, polygon_set
-from perga.engine import units as u
-from perga.engine.machine import Machine
 from perga.geometry.disc_polygon import closest_feature
-from perga.geometry.pieces import piece_features
+from perga.geometry.pieces import outline_arrays
 from perga.geometry.polygon import counter_clockwise
+from perga.machine import units as u
+from perga.machine.machine import Machine
 
 
 class OutlineFilter:
     """The pieces of the machine's multi-piece hammers in their bodies' frames (SI), with the
-    outline features of :func:`~perga.geometry.pieces.piece_features`."""
+    outline features of :func:`~perga.geometry.pieces.outline_arrays`."""
 
     def __init__(self, machine: Machine) -> None:
         self._piece: dict[pymunk.Shape, tuple[tuple[np.ndarray, ...], int]] = {}
@@ -37,13 +36,7 @@ class OutlineFilter:
                 continue
             pieces = [counter_clockwise(np.array(s.get_vertices()) * u.LENGTH) for s in shapes]
             loop = counter_clockwise(np.array(outline) * u.LENGTH)
-            polygons = polygon_set(
-                pieces,
-                np.zeros((len(pieces), 2)),
-                kind=[KINEMATIC] * len(pieces),
-                features=piece_features(pieces, [loop]),
-            )
-            arrays = polygons.outline()
+            arrays = outline_arrays(pieces, [loop])
             for k, shape in enumerate(shapes):
                 self._piece[shape] = (arrays, k)
 

@@ -32,11 +32,11 @@ from perga.contact.soft.polygon_set import (
     no_polygons,
 )
 from perga.contact.soft.threads import held_threads
-from perga.engine import units as u
 from perga.geometry.disc_polygon import bounding_radii, closest_feature
+from perga.machine import units as u
 
 if TYPE_CHECKING:
-    from perga.engine.effects import FloorKick
+    from perga.machine.effects import FloorKick
 
 DEFAULT_DT_FRACTION = 1.0 / 50.0
 """Default step as a fraction of the shortest contact duration (MercuryDPM convention)."""
@@ -443,7 +443,7 @@ class SoftGranules:
         """Advance n_steps steps of dt inside one compiled kernel call (threads as configured).
 
         First, in the same call (``kernel.Opening``): ``floor`` = (kick, ω), the floor-friction
-        kick the effects handed over (``perga.engine.effects.FloorKick``) with the rotor's
+        kick the effects handed over (``perga.machine.effects.FloorKick``) with the rotor's
         angular velocity ω (internal units), applied to every granule; then the granules' x, v,
         w and the polygons' vertices and com copied into ``kept`` (arrays of their shapes).
 

@@ -35,7 +35,7 @@ from perga.geometry.disc_polygon import FASTMATH, closest_feature
 from perga.model.records import HammerState, Impact
 
 if TYPE_CHECKING:
-    from perga.engine.machine import MachineState
+    from perga.machine.machine import MachineState
 
 
 class _Start(NamedTuple):

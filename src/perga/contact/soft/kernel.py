@@ -21,7 +21,7 @@ which numba compiles as tuples with attribute access):
 * ``Settings``: n_steps, dt (s), gravity (2,) m/s², skin (m), drag (1/s), v_cap (m/s), pairs,
   rebuild, first_step (the count of steps before the call);
 * ``Opening``: what a call does before its first step: the floor-friction kick the effects
-  handed over (``perga.engine.effects.FloorKick``) and the copy of the state after it that the
+  handed over (``perga.machine.effects.FloorKick``) and the copy of the state after it that the
   impact log keeps (``perga.contact.soft.impacts``), each optional.
 
 Bonds (the comb, ``perga.model.process``): a held granule stays where it is, at rest, while the
@@ -128,8 +128,8 @@ from perga.contact.soft.polygon_forces import (
 )
 from perga.contact.soft.polygon_set import HIST_ACTIVE, PolygonArrays, PolygonLoads, TableArrays
 from perga.contact.soft.stepping import add_pair_forces, kick_drift_one, motion_of
-from perga.engine.effects import floor_kick
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
+from perga.machine.effects import floor_kick
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
 # parallel loops' bodies are (parallel=True, error_model="numpy"): without parallel=True numba
@@ -263,7 +263,7 @@ class Settings(NamedTuple):
 
 class Opening(NamedTuple):
     """What a call does before its first step. The floor-friction kick if energy has two
-    entries (``perga.engine.effects.floor_kick`` on the granules, dv_max and omega in internal
+    entries (``perga.machine.effects.floor_kick`` on the granules, dv_max and omega in internal
     units, velocity_unit and length_unit the internal units in SI; corotating False: the
     velocities stand for the positions, as the effects' runner gives them), its removed and
     supplied energy added to energy in place; then, if keep, the granules' x, v, w and the

@@ -28,10 +28,10 @@ import numba
 import numpy as np
 
 from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, polygon_set
-from perga.engine import units as u
-from perga.engine.machine import Machine, MachineState, write_loads
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
+from perga.machine import units as u
+from perga.machine.machine import Machine, MachineState, write_loads
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit."""

@@ -26,8 +26,8 @@ from numba.extending import intrinsic, overload
 from perga.contact.soft import kernel
 from perga.contact.soft.granules import looks_for_coasting, pace_coasting
 from perga.contact.soft.machine import load_bodies, pose_polygons
-from perga.engine.energy import meter_step
-from perga.engine.machine import chipmunk_step, read_bodies
+from perga.machine.energy import meter_step
+from perga.machine.machine import chipmunk_step, read_bodies
 
 CONTACT_CHANGES, RELEASES = kernel.COUNT_CONTACT_CHANGES, kernel.COUNT_RELEASES
 

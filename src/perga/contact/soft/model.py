@@ -8,7 +8,7 @@ Per machine step (``machine_dt`` = k granule steps; the whole order is in
 * before Chipmunk's step: each hammer is posed one granule step ahead along its current motion
   (:mod:`perga.contact.soft.machine` explains why); the kernel takes k granule steps in one
   compiled call (:mod:`perga.contact.soft.kernel`), which first applies floor friction (the
-  effects hand its kick over: :class:`~perga.engine.effects.FloorKick`) and keeps the state
+  effects hand its kick over: :class:`~perga.machine.effects.FloorKick`) and keeps the state
   after it for the impact log: pair, wall and hammer contacts, kick-drift;
   hammers move rigidly with their current velocities during the call and the mean load on
   each becomes its body's force and torque for Chipmunk's step;
@@ -41,14 +41,14 @@ from perga.contact.soft.machine import MachinePolygons
 from perga.contact.soft.machine_steps import machine_steps
 from perga.contact.soft.threads import RECHECK, kernel_chunks, kernel_threads, numba_threads
 from perga.cores import CoreMonitor
-from perga.engine import units as u
-from perga.engine.effects import FloorKick
-from perga.engine.machine import Machine, MachineState
+from perga.machine import units as u
+from perga.machine.effects import FloorKick
+from perga.machine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
 from perga.model.spec import GranuleSpec
 
 if TYPE_CHECKING:
-    from perga.engine.simulation import CompiledMachine
+    from perga.machine.compiled import CompiledMachine
 
 ANGULAR_IMPULSE = u.FORCE * u.LENGTH * u.TIME
 """N·m·s per internal angular impulse unit."""

@@ -11,13 +11,12 @@ import pymunk
 import pytest
 
 from perga.engine import Simulation
-from perga.engine.batch import BodyReader
-from perga.engine.chipmunk_state import JointImpulses
-from perga.engine.effects import ConstraintLosses, HingeFriction, SwingStops
-from perga.engine.machine import write_loads
+from perga.machine.batch import BodyReader
+from perga.machine.chipmunk_state import JointImpulses
+from perga.machine.effects import ConstraintLosses, HingeFriction, SwingStops
+from perga.machine.machine import write_loads
 from perga.model import DriveSpec, EffectsSpec, RotorSpec, SceneSpec
-
-from .helpers import plate
+from tests.engine.helpers import plate
 
 
 def _sim(effects: EffectsSpec, gravity: tuple[float, float] = (0.0, 0.0)) -> Simulation:

@@ -19,7 +19,7 @@ orders of magnitude below a granule radius, so it does not shift the geometry me
 large enough that contacts resting on a face keep existing between steps.
 
 Every conversion is a multiplication by a power of ten applied at the interface
-(:mod:`perga.engine.machine` on the way in, :mod:`perga.engine.simulation` on the way out).
+(:mod:`perga.machine.machine` on the way in, :mod:`perga.engine.simulation` on the way out).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Batch state reads and velocity writes (perga.engine.batch) against per-body reads and
+"""Batch state reads and velocity writes (perga.machine.batch) against per-body reads and
 writes in a Python loop.
 
 Tolerance: exact. The reader multiplies the very float64 values Chipmunk holds by the same unit
@@ -17,10 +17,10 @@ import pytest
 
 from perga.contact.rigid.bodies import RigidBodies, attach_bodies
 from perga.engine import Simulation
-from perga.engine import batch as state_module
-from perga.engine import units as u
-from perga.engine.batch import BodyReader, BodyWriter
-from perga.engine.machine import build_machine
+from perga.machine import batch as state_module
+from perga.machine import units as u
+from perga.machine.batch import BodyReader, BodyWriter
+from perga.machine.machine import build_machine
 from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
 from tests.engine.helpers import plate
 

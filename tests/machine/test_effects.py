@@ -9,8 +9,9 @@ import numpy as np
 import pymunk
 import pytest
 
-from perga.engine import Simulation, units
-from perga.engine.effects import AirDrag, FloorFriction, Granules
+from perga.engine import Simulation
+from perga.machine import units
+from perga.machine.effects import AirDrag, FloorFriction, Granules
 from perga.model import (
     AirDragSpec,
     ChamberSpec,

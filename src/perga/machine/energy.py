@@ -23,13 +23,13 @@ The terms:
   rotor's angular velocity (its mean over the step when driven). This is the moment equation,
   not the energy equation, so the closure remains an independent check. The co-rotating floor's
   work comes from its own kicks. Hammers hitting their swing stops add what the stops removed
-  (:class:`~perga.engine.effects.SwingStops`).
+  (:class:`~perga.machine.effects.SwingStops`).
 * ``contact_dissipation``: the contact model's, plus the swing stops' losses.
-* ``friction``, ``drag``: what the effects removed (:mod:`perga.engine.effects`).
+* ``friction``, ``drag``: what the effects removed (:mod:`perga.machine.effects`).
 * ``gravity_work``: the potential energy released by in-plane gravity, Σ m g·Δr_cg.
 * ``joint_correction``: the work the pins' position correction did, Σ J·(v̄_hammer − v̄_rotor)
   at each hinge and −J·v̄_rotor at a driven rotor's axis per step (:func:`_pivot_work`; J the
-  pin's impulse, read raw through :class:`~perga.engine.chipmunk_state.JointImpulses`): an
+  pin's impulse, read raw through :class:`~perga.machine.chipmunk_state.JointImpulses`): an
   ideal pin does none; Chipmunk's pulls the drifting anchors together and does, first order
   in dt. Unbooked, it was the whole residual before a run's first impact
   (docs/reliability.md).
@@ -38,7 +38,7 @@ The terms:
   that (the first-order split of the kicks; the hammers' velocity held through soft granule
   substeps; the rigid impulses' step error; each falls with the step, docs/reliability.md)
   and rounding (the swing stops' and hinge friction's work is booked signed by their effects,
-  :class:`~perga.engine.effects.ConstraintLosses`).
+  :class:`~perga.machine.effects.ConstraintLosses`).
 * ``energy_in_play`` = max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|, ½Σ_i|ΔKE_i|,
   inflow, outflow, the granules' kinetic + elastic energy now and at t = 0, 1e-30 J), J: the
   work done and the energy the granules hold. ½Σ_i|ΔKE_i| (kinetic energy moved between
@@ -53,7 +53,7 @@ The terms:
 
 Costs per step: one compiled call (:func:`meter_step`: the constraint effects' losses, the
 pins' work and the balance over the few rotor-driven bodies) on the machine's states before and
-after the step (:meth:`~perga.engine.machine.Machine.state`, which the simulation also hands to
+after the step (:meth:`~perga.machine.machine.Machine.state`, which the simulation also hands to
 the contact model) and the pins' impulses in place, made by the Python step or inside the
 compiled whole steps of a contact model; a loop over all bodies only when
 :meth:`EnergyMeter.terms` is called.
@@ -67,10 +67,10 @@ import numba
 import numpy as np
 import pymunk
 
-from perga.engine import units as u
-from perga.engine.chipmunk_state import JointImpulses, doubles_at
-from perga.engine.effects import ConstraintLosses, Drive, constraint_losses
-from perga.engine.machine import Machine, MachineState
+from perga.machine import units as u
+from perga.machine.chipmunk_state import JointImpulses, doubles_at
+from perga.machine.effects import ConstraintLosses, Drive, constraint_losses
+from perga.machine.machine import Machine, MachineState
 from perga.model.records import LedgerTerms
 
 STATIC = -1
@@ -92,7 +92,7 @@ class EnergyMeter:
     doc).
 
     Call :meth:`before_step` and :meth:`after_step` around every ``space.step`` with the
-    machine's states (:meth:`~perga.engine.machine.Machine.state`) then.
+    machine's states (:meth:`~perga.machine.machine.Machine.state`) then.
     """
 
     def __init__(self, machine: Machine) -> None:
@@ -197,7 +197,7 @@ takes a meter of this type; a run without one books nothing in it)."""
 def meter_step(meter: tuple, before: np.ndarray, after: np.ndarray, contact_moment: float) -> None:
     """One step's terms (:meth:`EnergyMeter.after_step`) in compiled code, ``meter`` being
     :meth:`EnergyMeter.compiled`'s: each constraint effect's losses
-    (:func:`~perga.engine.effects.constraint_losses`), then, where there are pins or a balance,
+    (:func:`~perga.machine.effects.constraint_losses`), then, where there are pins or a balance,
     the pins' work and, with a balance, the drive's work added to the totals."""
     losses, pin_rows, pin_arms, pins, rows, mass, moment, gx_dt, gy_dt, terms, balance, totals = (
         meter
@@ -227,7 +227,7 @@ def _machine_terms(
     gx_dt: float,
     gy_dt: float,
 ) -> tuple[float, float]:
-    """The step's terms from two machine-state tables (:class:`~perga.engine.machine.
+    """The step's terms from two machine-state tables (:class:`~perga.machine.machine.
     MachineState`): the pins' work (:func:`_pivot_work`, pin k's jAcc at ``impulses[k]``)
     and the angular impulse on the bodies at ``rows`` besides gravity's
     (:func:`_moment_change`)."""
@@ -248,7 +248,7 @@ def _moment_change(
     gy_dt: float,
 ) -> float:
     """Σ m r × (v_after − v_before − g dt) + I (ω_after − ω_before) about the axis over the
-    bodies at ``rows`` of two machine-state tables (:class:`~perga.engine.machine.MachineState`):
+    bodies at ``rows`` of two machine-state tables (:class:`~perga.machine.machine.MachineState`):
     the angular impulse that acted on them in the step, besides gravity's."""
     total = 0.0
     for j in range(rows.size):

@@ -1,4 +1,4 @@
-"""Chipmunk's state that pymunk's pickling does not carry (perga.engine.chipmunk_state): a
+"""Chipmunk's state that pymunk's pickling does not carry (perga.machine.chipmunk_state): a
 hinged hammer whose centre of gravity is off its origin, pickled alone, comes back moved and
 flies off its hinge; with the raw state restored it steps on bit for bit. The layout checks
 refuse offsets that are wrong."""
@@ -12,8 +12,8 @@ import numpy as np
 import pymunk
 import pytest
 
-from perga.engine import chipmunk_state
-from perga.engine.chipmunk_state import (
+from perga.machine import chipmunk_state
+from perga.machine.chipmunk_state import (
     BodyViews,
     ChipmunkState,
     LayoutError,

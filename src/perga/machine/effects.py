@@ -1,4 +1,4 @@
-"""Optional physics, built with the machine (:func:`~perga.engine.machine.build_machine`) only
+"""Optional physics, built with the machine (:func:`~perga.machine.machine.build_machine`) only
 when the spec lists it (design §3): an absent effect leaves no per-step hook, constraint or
 callback.
 
@@ -24,7 +24,7 @@ friction and drag (docs/validation.md has the measured effect on the closed form
 
 Energy: every effect counts, in J, the energy it removed (``removed`` >= 0) and the work the
 rotor did through it (``supplied``, only the co-rotating floor), each from its own kicks or
-impulses, never from a global balance. The ledger (:mod:`perga.engine.energy`) sums them by
+impulses, never from a global balance. The ledger (:mod:`perga.machine.energy`) sums them by
 ``term``. A kick's energy is the exact change it made, granule by granule, summed in the loop
 that makes it.
 """
@@ -33,20 +33,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, ClassVar, Literal, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, NamedTuple, Protocol
 
 import numba
 import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
-from perga.engine import units as u
-from perga.engine.chipmunk_state import JointImpulses, doubles_at
+from perga.machine import units as u
+from perga.machine.chipmunk_state import JointImpulses, doubles_at
 from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
-    from perga.contact.protocol import GranuleKinematics
-    from perga.engine.machine import Machine
+    from perga.machine.machine import Machine
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
@@ -55,6 +54,38 @@ MASS = u.MASS
 
 Term = Literal["friction", "drag", "drive", "contact"]
 FloatArray = NDArray[np.float64]
+
+
+class GranuleKinematics(Protocol):
+    """All granules' velocities, read and written at once for the effects' kicks, rows in the
+    spec's granule order, in the model's own units with the factors to Chipmunk's internal units
+    (mm/ms; positions mm): an internal value is the array's divided by its unit."""
+
+    @property
+    def count(self) -> int:
+        """Number of granules."""
+        ...
+
+    def constants(self) -> tuple[FloatArray, FloatArray]:
+        """The granules' masses (kg) and radii (m), rows as the velocities' (read only: they
+        may be the model's own arrays)."""
+        ...
+
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
+        """Velocities (n, 2), positions (n, 2) if asked for (else None), and the internal
+        velocity and length units in the arrays' units: the model's own arrays or fresh ones."""
+        ...
+
+    def write_velocities(self, velocities: FloatArray) -> None:
+        """Set every granule's velocity from ``velocities`` (n, 2), as :meth:`read` gave them."""
+        ...
+
+    def take_floor_kick(self, kick: FloorKick) -> bool:
+        """Whether the model takes floor friction's kick over: it then applies ``kick`` at the
+        start of its work before the machine's step
+        (:meth:`~perga.contact.protocol.ContactModel.before_machine_step`), with the rotor's
+        angular velocity of the state it is given, instead of the effects' runner before it."""
+        ...
 
 
 class Effect:
@@ -153,7 +184,7 @@ class FloorKick(NamedTuple):
 class Granules(NamedTuple):
     """The granules a kick changes: velocities (n, 2) and positions (n, 2) or None, C-contiguous,
     in the contact model's units, the internal velocity and length units in those
-    (:class:`~perga.contact.protocol.GranuleKinematics`), masses (kg), radii (m)."""
+    (:class:`GranuleKinematics`), masses (kg), radii (m)."""
 
     velocities: FloatArray
     positions: FloatArray | None
@@ -211,7 +242,7 @@ class ConstraintLosses(Effect):
     pair of bodies).
 
     No Chipmunk callback: the energy meter hands the machine's states before and after the step
-    to :func:`constraint_losses` (:mod:`perga.engine.energy`), which equal what a constraint's
+    to :func:`constraint_losses` (:mod:`perga.machine.energy`), which equal what a constraint's
     ``pre_solve`` and ``post_solve`` see (Chipmunk integrates positions, then calls
     ``pre_solve`` before touching velocities, and ``post_solve`` after the last iteration);
     ``constraint.impulse`` read after the step is the step's impulse ``post_solve`` reads.
@@ -352,7 +383,7 @@ def constraint_losses(
     """Take j·ω̄_rel from the removed energy ``energy[0]`` for each constraint in turn
     (:class:`ConstraintLosses`, whose :meth:`~ConstraintLosses.losses` gives the arguments
     but the machine-state tables): angular impulse j (its jAcc, the double at the address
-    ``impulses[c]``, :meth:`~perga.engine.chipmunk_state.JointImpulses.addresses`) on body
+    ``impulses[c]``, :meth:`~perga.machine.chipmunk_state.JointImpulses.addresses`) on body
     ``rows[c, 1]`` against ``rows[c, 0]``, ω̄_rel the mean of their relative angular velocity
     at the step's start and end (column 5 of the machine-state tables ``before`` and
     ``after``)."""

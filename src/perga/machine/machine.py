@@ -2,7 +2,7 @@
 effects the spec lists. The only place the machine's Pymunk objects are made; the granules and
 the chamber wall belong to the contact model (:mod:`perga.contact`), which adds what it needs.
 
-Construction (all quantities converted to the internal units of :mod:`perga.engine.units`):
+Construction (all quantities converted to the internal units of :mod:`perga.machine.units`):
 
 * Rotor: a kinematic body at the origin with ``angular_velocity = ω``; it carries no shapes of
   its own (a rotor disc is out of the granules' plane).
@@ -22,7 +22,7 @@ Construction (all quantities converted to the internal units of :mod:`perga.engi
   - ``free``: a dynamic body with no attachment, starting with the spec's velocity (for
     validation scenes such as a free two-body impact).
 
-* Effects: :mod:`perga.engine.effects` builds exactly the effects the spec lists, after the
+* Effects: :mod:`perga.machine.effects` builds exactly the effects the spec lists, after the
   hammers (the drive turns the rotor into a dynamic body).
 """
 
@@ -38,8 +38,8 @@ import numpy as np
 import pymunk
 from numpy.typing import NDArray
 
-from perga.engine import units as u
-from perga.engine.chipmunk_state import (
+from perga.machine import units as u
+from perga.machine.chipmunk_state import (
     VIEW_ANGLE,
     VIEW_F,
     VIEW_T,
@@ -54,7 +54,7 @@ from perga.engine.chipmunk_state import (
     restore,
     space_step,
 )
-from perga.engine.effects import Effect, SwingStops, build_effects
+from perga.machine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
 from perga.model.records import HammerState
 from perga.model.spec import HammerSpec, SceneSpec, Vec2
@@ -68,8 +68,8 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class MachineState:
     """The machine's bodies at one instant (:attr:`Machine.bodies`: row 0 the rotor, then the
-    hammer bodies that are not the rotor), internal units (:mod:`perga.engine.units`), read raw
-    from their C structs (:class:`~perga.engine.chipmunk_state.BodyViews`): ``table`` (k, 6),
+    hammer bodies that are not the rotor), internal units (:mod:`perga.machine.units`), read raw
+    from their C structs (:class:`~perga.machine.chipmunk_state.BodyViews`): ``table`` (k, 6),
     per body x, y (its centre of gravity in the world), angle, vx, vy (velocity of the centre
     of gravity), ω. Compiled code takes the table."""
 
@@ -103,7 +103,7 @@ class Machine:
     ``hammer_bodies[i]`` is the rotor body for a welded hammer; ``hammer_shapes[i]`` are hammer
     i's convex pieces, ``hammer_outlines[i]`` its whole outline in its body's frame (internal
     units); ``hinges`` the hinged hammers' pivot joints; ``effects`` the effects built
-    (:mod:`perga.engine.effects`), in build order.
+    (:mod:`perga.machine.effects`), in build order.
     """
 
     spec: SceneSpec
@@ -120,7 +120,7 @@ class Machine:
 
     def __getstate__(self) -> dict[str, object]:
         """The fields, with what pymunk's pickle of the space misses
-        (:func:`~perga.engine.chipmunk_state.capture`): a copy or a pickle round trip steps as
+        (:func:`~perga.machine.chipmunk_state.capture`): a copy or a pickle round trip steps as
         the original does."""
         return {**self.__dict__, "_chipmunk": capture(self.space)}
 
@@ -160,7 +160,7 @@ class Machine:
         """The arguments of :func:`chipmunk_step` for steps of ``dt`` (internal time units):
         (cpSpaceStep's address, the space's, dt, :meth:`body_addresses`, the bodies' centres of
         gravity), or None while pymunk's ``Space.step`` has work of its own
-        (:func:`~perga.engine.chipmunk_state.raw_space_step`). Take them afresh for each run of
+        (:func:`~perga.machine.chipmunk_state.raw_space_step`). Take them afresh for each run of
         compiled steps: the addresses change with a checkpoint read back."""
         addresses = raw_space_step(self.space)
         if addresses is None:
@@ -187,7 +187,7 @@ class Machine:
         """The :class:`HammerState` of hammer ``index`` now; ``state``, the machine's state now
         if it has been read, gives that of a hammer with a body of its own (hinged or free)
         without asking pymunk: its velocity at the centre of gravity is its body's v, the same
-        floats (``tests/engine/test_machine_state.py``)."""
+        floats (``tests/machine/test_machine_state.py``)."""
         spec = self.spec.hammers[index]
         body = self.hammer_bodies[index]
         welded = body is self.rotor
@@ -255,7 +255,7 @@ class Machine:
 def read_bodies(addresses: NDArray[np.uint64], cogs: FloatArray, out: FloatArray) -> None:
     """Row j of ``out``: body j's centre of gravity in the world, angle, velocity and angular
     velocity from its raw struct at ``addresses[j]`` (:class:`MachineState`;
-    :meth:`~perga.engine.chipmunk_state.BodyViews.addresses`). The body's position is
+    :meth:`~perga.machine.chipmunk_state.BodyViews.addresses`). The body's position is
     its transform applied to the origin, as ``cpBodyGetPosition`` computes it, and the centre of
     gravity ``cogs[j]`` (body frame) is added turned by the angle: the same floats as pymunk's
     ``body.position`` + R(angle)·``center_of_gravity``."""

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from perga.analytic.impact import normal_impact
-from perga.engine import Simulation, units
-from perga.engine.energy import STATIC, _pivot_work
+from perga.engine import Simulation
+from perga.machine import units
+from perga.machine.energy import STATIC, _pivot_work
 from perga.model import (
     ContactSpec,
     DriveSpec,

@@ -1,7 +1,7 @@
 """Bulk, checked reads of chosen bodies' state (the rigid granules) and of every body of a space
 (the rigid dissipation), and the one bulk write of their velocities, through ``pymunk.batch``
 (with the arbiter meter, :mod:`perga.contact.rigid.dissipation`, the places it is used). The
-machine's few bodies are read raw instead (:class:`~perga.engine.chipmunk_state.BodyViews`).
+machine's few bodies are read raw instead (:class:`~perga.machine.chipmunk_state.BodyViews`).
 
 Reading ``body.position`` for every body in a Python loop costs an attribute access per
 body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
@@ -39,7 +39,7 @@ nowhere else, with these properties:
   nowhere else (a marked write, read back per body, then undone).
 
 Values are copies (the batch buffer is reused), converted to SI by one multiplication by the
-unit of :mod:`perga.engine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
+unit of :mod:`perga.machine.units`, i.e. bit-for-bit what ``np.array(body.position) * LENGTH``
 gives. Rows are in the order of the bodies given. :class:`BodyWriter` works in Chipmunk's
 internal units on both sides (its client, the effects' kicks, computes in them).
 """
@@ -57,7 +57,7 @@ import pymunk.batch as pb
 from numpy.typing import NDArray
 from pymunk._chipmunk import ffi, lib
 
-from perga.engine import units as u
+from perga.machine import units as u
 
 FloatArray = NDArray[np.float64]
 _F = pb.BodyFields
