@@ -6,7 +6,7 @@ vertices. Neighbouring pieces share their mitre side exactly: no gaps, no overla
 outline is the inner one offset by ``thickness``. At a sharp convex corner of the wall (where
 an outlet channel leaves a round chamber) the mitre shortens the offset edges, so a short edge
 there limits the thickness (``wall_pieces`` says so). Thick walls stop fast granules tunnelling
-(design §5); a round chamber is the circumscribed N-gon of its circle.
+(docs/pymunk.md); a round chamber is the circumscribed N-gon of its circle.
 
 Units: those of the input (m in perga).
 """

@@ -5,8 +5,7 @@ machine's few bodies are read raw instead (:class:`~perga.machine.chipmunk_state
 
 Reading ``body.position`` for every body in a Python loop costs an attribute access per
 body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
-(docs/performance.md has the gain: 3 µs against 12 µs for the seven bodies of a machine, far
-more for thousands of granules). The batch API is experimental, so it is wrapped here and
+(docs/performance.md has the gain). The batch API is experimental, so it is wrapped here and
 nowhere else, with these properties:
 
 * **It cannot select bodies.** ``get_space_bodies`` walks Chipmunk's body arrays: every
@@ -82,8 +81,8 @@ _ALL_WIDTH = 6
 class _BatchBuffer:
     """A ``pymunk.batch.Buffer`` filled and written back by the C iterators of
     ``pymunk.batch.get_space_bodies`` and ``set_space_bodies``, called directly with a C argument
-    kept per field set (the wrappers allocate it and look the iterator up on every call: 1.4 µs
-    against 0.4), and read through numpy views of its C arrays, made again only when a fetch has
+    kept per field set (the wrappers allocate it and look the iterator up on every call), and
+    read through numpy views of its C arrays, made again only when a fetch has
     reallocated them (instead of two buffer objects and two ``frombuffer`` calls a fetch)."""
 
     def __init__(self) -> None:

@@ -215,9 +215,8 @@ def _call_space_step(typingctx, function, space, dt):
 
 def space_step(function: int, space: int, dt: float) -> None:
     """Chipmunk's step of ``space`` by ``dt`` (internal time units) through the addresses of
-    :func:`raw_space_step`; what pymunk's ``Space.step`` does while that gives addresses (1.6 µs
-    a call from compiled code where ``Space.step`` takes 2.2, docs/performance.md). In Python
-    (numba's JIT off) through ctypes."""
+    :func:`raw_space_step`; what pymunk's ``Space.step`` does while that gives addresses, with
+    less overhead a call (docs/performance.md). In Python (numba's JIT off) through ctypes."""
     ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_double)(int(function))(int(space), dt)
 
 

@@ -1,5 +1,5 @@
 """Optional physics, built with the machine (:func:`~perga.machine.machine.build_machine`) only
-when the spec lists it (design §3): an absent effect leaves no per-step hook, constraint or
+when the spec lists it: an absent effect leaves no per-step hook, constraint or
 callback.
 
 Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpec` field name.
@@ -206,7 +206,7 @@ def _register(cls: type[Effect]) -> type[Effect]:
 class Drive(Effect):
     """The rotor becomes a dynamic body of the spec's inertia (plus the welded hammers' moments
     about the axis), pinned to the static body at the axis and driven by
-    ``SimpleMotor(rotor, static_body, ω)`` (this order turns it forward, design §5) whose
+    ``SimpleMotor(rotor, static_body, ω)`` (this order turns it forward, docs/pymunk.md) whose
     ``max_force`` is the torque limit. The rotor's mass (it only loads the axis pin) is that of
     a uniform disc of the rotor radius with the given inertia, plus the welded hammers'; its
     centre of mass stays on the axis. The motor's work is measured by the energy meter from

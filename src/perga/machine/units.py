@@ -1,6 +1,6 @@
 """Scale factors between SI (the engine's interface) and the units Chipmunk works in.
 
-Chipmunk's defaults assume game units (design §5): the bounding-box tree inflates each box by
+Chipmunk's defaults assume game units (docs/pymunk.md): the bounding-box tree inflates each box by
 0.1 × velocity × (1 time unit), ``collision_slop`` is a length and ``collision_bias`` and
 ``PivotJoint.error_bias`` are fractions of error left after one time unit. In SI a 20 m/s
 granule would get a 2 m box and a 30 % overlap would still be there after 0.1 s. Inside Pymunk

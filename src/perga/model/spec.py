@@ -179,7 +179,7 @@ class GranuleSpec:
     rolls: True gives a disc's moment m r²/2 (it can roll); False gives moment = inf, a sliding
     point that never changes its angular velocity; angular_velocity: initial, rad/s (a sliding
     granule on a rotor face should start with the rotor's ω so that its surface does not slip
-    against the face, design §5); bond_force: held at its position (a comb's cell) until the
+    against the face, docs/pymunk.md); bond_force: held at its position (a comb's cell) until the
     force the bond must supply exceeds this, N; None: free.
     """
 
@@ -252,7 +252,7 @@ class ChamberSpec:
     """A static chamber wall around the rotor axis: round, or along an outline.
 
     radius: inner radius of a round wall, or the nearest point of ``outline`` to the axis, m;
-    wall_thickness: m (thick walls stop fast granules tunnelling, design §5); material: name
+    wall_thickness: m (thick walls stop fast granules tunnelling, docs/pymunk.md); material: name
     in the contact table; segments: number of thick segments whose inner faces touch the
     circle of a round wall (>= 8); outline: the wall's inner outline (m, counter-clockwise,
     around the axis), None for a round wall. Hammers never collide with the wall.

@@ -81,8 +81,8 @@ def save(mesh: vtkUnstructuredGrid, path: Path) -> None:
     """Write ``mesh`` to ``path`` (.vtu): binary, zlib at ``ZLIB_LEVEL``, inline. VTK writes
     the file into memory and perga writes it to disk whole (:func:`~perga.output.files.
     write_new`): VTK's own file writing crashed the process (a segmentation fault, a corrupted
-    heap) when a disk filled up in the middle of a file, and took 1.2 ms a 300-granule frame
-    against 0.3 ms into memory. A failed write leaves no file and raises OSError."""
+    heap) when a disk filled up in the middle of a file, and was slower than writing into
+    memory (docs/performance.md). A failed write leaves no file and raises OSError."""
     writer = vtkXMLUnstructuredGridWriter()
     writer.SetInputData(mesh)
     writer.SetDataModeToBinary()

@@ -133,7 +133,7 @@ from perga.machine.effects import floor_kick
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
 # parallel loops' bodies are (parallel=True, error_model="numpy"): without parallel=True numba
-# 0.68 compiles the same loops about 3x slower (docs/performance.md), and with numba's error
+# compiles the same loops to slower code (docs/performance.md), and with numba's error
 # model of parallel regions their arithmetic is the same bit for bit (one thread then agrees
 # with two where the sums do not depend on the thread count). Numba warns that nothing could be
 # parallelised.

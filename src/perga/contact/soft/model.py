@@ -149,8 +149,8 @@ class SoftContacts:
 
     def running(self) -> AbstractContextManager[None]:
         """numba's thread count held at the run's first (``granules.threads``) over a run
-        (each kernel call then finds it set: setting and restoring it costs about 3.5 µs a
-        step, paid only while the free cores have changed the count)."""
+        (each kernel call then finds it set: setting and restoring it a step is paid only while
+        the free cores have changed the count)."""
         return numba_threads(self.granules.threads)
 
     def present_ids(self) -> np.ndarray:

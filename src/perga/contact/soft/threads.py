@@ -9,7 +9,7 @@ every ``RECHECK`` seconds of a run) nor numba's own limit (``numba.get_num_threa
 Dask worker sets to one). The same case gives the same bytes on an idle machine, a busy one and
 a Dask worker.
 
-Each kernel step opens several parallel regions whose launch costs tens of µs; below
+Each kernel step opens several parallel regions, each with a launch cost; below
 ``THREADED_FROM`` granules that costs more than a second thread gains, and on a busy machine a
 second thread that has no free core to run on makes a step many times slower
 (docs/performance.md).
@@ -53,10 +53,9 @@ _local = threading.local()
 def numba_threads(threads: int) -> Iterator[None]:
     """Run the block's compiled parallel loops on ``threads`` threads, then restore the count.
     Everything parallel a soft run calls goes through here or ``SoftGranules.step``: a parallel
-    loop on a second thread that has no free core waits for one (a 300-granule frame's energy
-    took 5.5-8 ms instead of 0.37 ms on a loaded machine, docs/performance.md). Inside the
-    block ``held_threads()`` is ``threads``: a kernel call that needs that count then takes it
-    as set, without asking numba (2.5 µs a call in a run, docs/performance.md)."""
+    loop on a second thread that has no free core waits for one (docs/performance.md). Inside
+    the block ``held_threads()`` is ``threads``: a kernel call that needs that count then takes
+    it as set, without asking numba."""
     previous = numba.get_num_threads()
     outer = held_threads()
     if previous != threads:
