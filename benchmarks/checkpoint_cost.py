@@ -25,10 +25,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from perga import checkpoints
 from perga.case import load_case
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
+from perga.run import checkpoints
 
 CASES = ("separator", "soft-separator", "plate-hammers-soft", "bee-bread-separator")
 

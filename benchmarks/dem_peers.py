@@ -218,9 +218,9 @@ def rigid_engine(spec: SceneSpec, warm: int, steps: int) -> Engine:
             sim.step()
         seconds = time.perf_counter() - t0
         state = {
-            "x": np.asarray(sim.granule_positions()),
-            "v": np.asarray(sim.granule_velocities()),
-            "w": np.asarray(sim.granule_angular_velocities()),
+            "x": np.asarray(sim.frame().granules.positions),
+            "v": np.asarray(sim.frame().granules.velocities),
+            "w": np.asarray(sim.frame().granules.angular_velocities),
         }
         return Result(seconds, steps, 0, None, state)
 
@@ -576,7 +576,7 @@ def rigid_impact(v0: float) -> float:
     sim = Simulation(spec, record_impacts=False, track_energy=False)
     for _ in range(50):
         sim.step()
-    return float(sim.granule_velocities()[0][1] / v0)
+    return float(sim.frame().granules.velocities[0][1] / v0)
 
 
 def restitution_checks(lmp: str | None, workdir: Path, refinements) -> list[str]:

@@ -2,7 +2,7 @@
 step spent outside the soft kernel, optionally side by side with another commit.
 
 Each measurement is one `perga run` done in a fresh subprocess (``--one``) through
-``perga.runner.run_case``, with ``Simulation.advance`` (``Simulation.step`` in a tree before
+``perga.run.run_case``, with ``Simulation.advance`` (``Simulation.step`` in a tree before
 it), ``SoftGranules.step`` (a kernel call from Python) and the soft model's compiled whole
 steps (``perga.contact.soft.machine_steps``) wrapped by timers: wall time of the run
 (``summary.json``, build and output included), time in the steps, time in the kernel (in the
@@ -48,7 +48,11 @@ def one(case: str, duration: float, out: str) -> None:
     from perga.case import load_case
     from perga.contact.soft.granules import SoftGranules
     from perga.engine.simulation import Simulation
-    from perga.runner import prepare_directory, run_case
+
+    try:
+        from perga.run import prepare_directory, run_case
+    except ImportError:  # a tree before perga.run
+        from perga.runner import prepare_directory, run_case
 
     timers = {"step": 0.0, "kernel": 0.0, "coasted": 0, "granule_steps": 0}
 

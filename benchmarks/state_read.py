@@ -1,6 +1,5 @@
-"""Cost of reading granule state: ``perga.machine.batch.BodyReader`` (pymunk.batch)
-against the
-per-body Python loop of ``Simulation.granule_positions`` & co.
+"""Cost of reading granule state: ``perga.machine.batch.BodyReader`` (pymunk.batch) against a
+per-body Python loop over the rigid granules' bodies (positions, velocities, spins).
 
 Scene: the one of ``engine_vs_pymunk.py`` (rotor, 6 hinged hammers, chamber), after 20 steps so
 that the state is not the initial one. Reported: median µs per read over --repeats reads.
@@ -51,14 +50,16 @@ def main(argv: list[str] | None = None) -> int:
             sim.step()
         reader = BodyReader(sim.machine.space, sim.contacts.bodies.granule_bodies)
         state = reader.read()
-        assert np.array_equal(state.positions, sim.granule_positions())
-        assert np.array_equal(state.velocities, sim.granule_velocities())
-        assert np.array_equal(state.angular_velocities, sim.granule_angular_velocities())
+        granules = sim.frame().granules
+        assert np.array_equal(state.positions, granules.positions)
+        assert np.array_equal(state.velocities, granules.velocities)
+        assert np.array_equal(state.angular_velocities, granules.angular_velocities)
+        bodies = sim.contacts.bodies.granule_bodies
 
-        def loop(sim: Simulation = sim) -> None:
-            sim.granule_positions()
-            sim.granule_velocities()
-            sim.granule_angular_velocities()
+        def loop(bodies: list = bodies) -> None:
+            np.array([tuple(b.position) for b in bodies])
+            np.array([tuple(b.velocity) for b in bodies])
+            np.array([b.angular_velocity for b in bodies])
 
         t_loop = median_us(loop, args.repeats)
         t_batch = median_us(reader.read, args.repeats)

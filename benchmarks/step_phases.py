@@ -77,7 +77,7 @@ def main() -> None:
     for _ in range(200):
         reference.step()
         phased_step(copy, {})
-    same = np.array_equal(reference.granule_positions(), copy.granule_positions())
+    same = np.array_equal(reference.frame().granules.positions, copy.frame().granules.positions)
     if not same:
         raise SystemExit("the phased copy of the step no longer matches Simulation.step")
     sim = Simulation(spec)

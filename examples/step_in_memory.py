@@ -16,7 +16,7 @@ case = perga.load_case(CASES / "single-granule.toml", overrides=["rotor.rpm=900"
 sim = perga.Simulation(perga.scene_spec(case))
 for t in (0.01, 0.02, 0.03, 0.04):
     sim.run(t - sim.time)
-    speed = np.hypot(*sim.granule_velocities()[0])
+    speed = np.hypot(*sim.frame().granules.velocities[0])
     print(f"t = {sim.time:.3f} s: granule speed {speed:.3f} m/s, {len(sim.impacts)} impacts")
 ledger = sim.energy()
 print(

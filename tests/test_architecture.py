@@ -24,12 +24,10 @@ ALLOWED: dict[str, set[str]] = {
     "output": {"output", "model", "geometry", "analytic"},
     "stats": {"stats", "case", "analytic", "model", "output"},
     "studies": {"studies", "stats", "case", "analytic", "model", "geometry", "engine", "output",
-                "runner", "stopping", "cores", "__init__"},
-    "runner": {"runner", "case", "model", "engine", "geometry", "output", "stopping",
-               "checkpoints"},
-    "checkpoints": {"checkpoints", "engine", "output", "__init__"},
-    "cli": {"cli", "__init__", "case", "analytic", "model", "studies", "output", "runner", "stats",
-            "stopping", "checkpoints", "progress"},
+                "run", "stopping", "cores", "__init__"},
+    "run": {"run", "case", "model", "engine", "geometry", "output", "stopping", "__init__"},
+    "cli": {"cli", "__init__", "case", "analytic", "model", "studies", "output", "run", "stats",
+            "stopping", "progress"},
     "stopping": set(),
     "progress": set(),
     "cores": set(),
@@ -194,7 +192,7 @@ def test_a_circle_is_seen() -> None:
         ("perga.output.vtk", "perga.contact.soft.polygon_set"),
         ("perga.case.checks", "perga.model.spec"),
         ("perga.stats.energy", "perga.machine.energy"),
-        ("perga.runner", "perga.contact.rigid.model"),
+        ("perga.run", "perga.contact.rigid.model"),
         ("perga.studies.compare", "perga.cli"),
         ("perga.model.frame", "perga.output.tables"),
     ],
@@ -212,7 +210,7 @@ def test_the_rules_catch_a_forbidden_import(module: str, name: str) -> None:
         ("perga.contact.soft.model", "perga.machine.machine.Machine"),
         ("perga.contact.soft.model", "perga.contact.protocol.GranuleState"),
         ("perga.engine.simulation", "perga.machine.compiled.compiled_machine"),
-        ("perga.runner", "perga.engine.simulation"),
+        ("perga.run", "perga.engine.simulation"),
         ("perga.output.vtk", "perga.model.frame"),
     ],
 )
@@ -274,7 +272,7 @@ def test_a_run_does_not_load_the_mesh_libraries() -> None:
     distribution drawn, not by the modules every run loads: together they cost 0.35-0.6 s of
     each run's start (docs/performance.md)."""
     code = (
-        "import sys, perga.runner, perga.case, perga.output.vtk, perga.engine, perga.geometry;"
+        "import sys, perga.run, perga.case, perga.output.vtk, perga.engine, perga.geometry;"
         "print(sorted(m for m in ('trimesh', 'scipy.stats') if m in sys.modules))"
     )
     out = subprocess.run(

@@ -18,6 +18,6 @@ def test_benchmark_case_runs(path: Path) -> None:
     within the project's 1 % (the ledger is measured from the start)."""
     sim = Simulation(scene_spec(load_case(path, overrides=["solver.threads=1"])))
     sim.run(20 * sim.dt)
-    assert np.isfinite(sim.granule_positions()).all()
-    assert np.isfinite(sim.granule_velocities()).all()
+    assert np.isfinite(sim.frame().granules.positions).all()
+    assert np.isfinite(sim.frame().granules.velocities).all()
     assert abs(sim.energy().closure) < 0.01

@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from perga import checkpoints
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
 from perga.model.from_case import scene_spec
+from perga.run import checkpoints
 from tests.run_files import assert_same_outputs, outputs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -182,7 +182,7 @@ def test_the_last_two_checkpoints_are_kept_and_file_writes_do_not_change_results
 def test_a_soft_simulation_goes_on_from_its_checkpoint_bit_for_bit(case):
     """The soft kernel's state is arrays and the machine's Pymunk space has no contacts: a
     round trip through a checkpoint changes nothing (the rigid engine's does change the order
-    in which Chipmunk solves contacts: module doc of perga.checkpoints)."""
+    in which Chipmunk solves contacts: module doc of perga.run.checkpoints)."""
     sim = Simulation(scene_spec(load_case(ROOT / "cases" / case)))
     with sim.contacts.running():
         for _ in range(2000):

@@ -80,10 +80,10 @@ def _blade_tip(case: Case) -> float:
 def _rotor_frame(sim: Simulation, omega: float) -> tuple[float, float, float]:
     """Granule 0's coordinate along the blade (m), its velocity relative to the blade along it
     (m/s) and its coordinate across it (m)."""
-    theta = sim.rotor_angle()
+    theta = sim.frame().machine.rotor_angle
     ex = np.array([math.cos(theta), math.sin(theta)])
     ey = np.array([-math.sin(theta), math.cos(theta)])
-    p, v = sim.granule_positions()[0], sim.granule_velocities()[0]
+    p, v = sim.frame().granules.positions[0], sim.frame().granules.velocities[0]
     v_rel = v - _z_cross(omega, p)
     return float(p @ ex), float(v_rel @ ex), float(p @ ey)
 
@@ -196,7 +196,7 @@ def test_rolling_disc_on_blade() -> None:
     assert v == pytest.approx(float(exact.velocity(t_exact)), rel=REQUIRED)
     assert drift < 0.05 * r
     # and it rolls: spin relative to the blade = -x'/r at the exit (measured 2e-4 relative)
-    (spin,) = sim.granule_angular_velocities()
+    (spin,) = sim.frame().granules.angular_velocities
     assert spin - omega == pytest.approx(-float(exact.velocity(t_exact)) / r, rel=REQUIRED)
 
 
@@ -250,10 +250,13 @@ def test_two_body_impact(tmp_path: Path, M: float, m: float) -> None:
     exact = normal_impact(m, M, 0.0, V, e)
     (impact,) = sim.impacts
     np.testing.assert_allclose(
-        sim.granule_velocities()[0], (0.0, exact.granule_velocity), rtol=RTOL_EXACT, atol=1e-12
+        sim.frame().granules.velocities[0],
+        (0.0, exact.granule_velocity),
+        rtol=RTOL_EXACT,
+        atol=1e-12,
     )
     np.testing.assert_allclose(
-        sim.hammer_velocities()[0], (0.0, exact.hammer_velocity), rtol=RTOL_EXACT, atol=1e-12
+        sim.frame().machine.velocities[0], (0.0, exact.hammer_velocity), rtol=RTOL_EXACT, atol=1e-12
     )
     assert impact.normal_velocity_before == pytest.approx(-V, rel=RTOL_EXACT)
     assert impact.normal_velocity_after == pytest.approx(e * V, rel=RTOL_EXACT)
@@ -288,8 +291,8 @@ def test_oblique_impact_with_friction(kind: str) -> None:
         shape="disc", omega_g=0.0,
     )  # fmt: skip
     assert exact.sticks is (kind == "stick")
-    after = sim.granule_velocities()[0] - v_face
-    (spin,) = sim.granule_angular_velocities()
+    after = sim.frame().granules.velocities[0] - v_face
+    (spin,) = sim.frame().granules.angular_velocities
     assert float(after @ n) == pytest.approx(exact.normal_velocity, rel=RTOL_EXACT)
     assert float(after @ t) == pytest.approx(exact.tangential_velocity, rel=RTOL_EXACT)
     assert spin == pytest.approx(exact.spin, rel=RTOL_EXACT)
@@ -333,12 +336,12 @@ def test_hinged_hammer_hits_free_granule() -> None:
 
     sim = _simulation(case)
     while not sim.impacts and sim.time < case.solver.duration:
-        (spin_before,) = sim.hammer_angular_velocities()  # rad/s
+        (spin_before,) = sim.frame().machine.angular_velocities  # rad/s
         sim.step()
     (impact,) = sim.impacts
-    (spin_after,) = sim.hammer_angular_velocities()
-    phi = sim.rotor_angle()
-    (alpha,) = sim.hammer_swing_angles()
+    (spin_after,) = sim.frame().machine.angular_velocities
+    phi = sim.frame().machine.rotor_angle
+    (alpha,) = sim.frame().machine.swing_angles
     hinge = R * np.array([math.cos(phi), math.sin(phi)])
     axis = np.array([math.cos(phi + alpha), math.sin(phi + alpha)])
     r_k = np.array(impact.point) - hinge
@@ -348,7 +351,9 @@ def test_hinged_hammer_hits_free_granule() -> None:
         M=M, I_A=I_A, r_c=l_cg * axis, r_k=r_k, n=impact.normal, Omega=spin_before,
         v_A=_z_cross(omega, hinge), m=m, v_g=(0.0, 0.0), e=e,
     )  # fmt: skip
-    np.testing.assert_allclose(sim.granule_velocities()[0], exact.granule_velocity, rtol=1e-5)
+    np.testing.assert_allclose(
+        sim.frame().granules.velocities[0], exact.granule_velocity, rtol=1e-5
+    )
     assert impact.normal_impulse == pytest.approx(exact.impulse, rel=1e-5)
     assert spin_after - spin_before == pytest.approx(
         exact.angular_velocity - spin_before, rel=REQUIRED
@@ -356,7 +361,9 @@ def test_hinged_hammer_hits_free_granule() -> None:
 
     M_eff = hinged_effective_mass(I_A, a)
     ideal = (1 + e) * M_eff / (M_eff + m) * omega * (R + a)
-    assert float(np.hypot(*sim.granule_velocities()[0])) == pytest.approx(ideal, rel=REQUIRED)
+    assert float(np.hypot(*sim.frame().granules.velocities[0])) == pytest.approx(
+        ideal, rel=REQUIRED
+    )
     impulse = (1 + e) * m * M_eff / (m + M_eff) * omega * (R + a)
     assert spin_after - spin_before == pytest.approx(-impulse * a / I_A, rel=REQUIRED)
 
@@ -386,7 +393,7 @@ def test_hinged_hammer_swing_frequency() -> None:
     alpha = np.empty(n)
     for i in range(n):
         sim.step()
-        alpha[i] = sim.hammer_swing_angles()[0]
+        alpha[i] = sim.frame().machine.swing_angles[0]
     t = dt * np.arange(1, n + 1)
     down = np.nonzero((alpha[:-1] > 0) & (alpha[1:] <= 0))[0]
     crossings = t[down] + dt * alpha[down] / (alpha[down] - alpha[down + 1])
@@ -396,7 +403,7 @@ def test_hinged_hammer_swing_frequency() -> None:
     assert 2 * math.pi / measured == pytest.approx(big_omega, rel=REQUIRED)
     assert alpha.max() == pytest.approx(amplitude, rel=REQUIRED)
     # the granule on the axis is never touched
-    np.testing.assert_array_equal(sim.granule_velocities(), [[0.0, 0.0]])
+    np.testing.assert_array_equal(sim.frame().granules.velocities, [[0.0, 0.0]])
 
 
 def test_successive_bounces_on_the_floor() -> None:
@@ -417,15 +424,15 @@ def test_successive_bounces_on_the_floor() -> None:
     ys, vs = [], []
     while sim.time < case.solver.duration:
         sim.step()
-        ys.append(sim.granule_positions()[0][1])
-        vs.append(sim.granule_velocities()[0][1])
+        ys.append(sim.frame().granules.positions[0][1])
+        vs.append(sim.frame().granules.velocities[0][1])
     apexes = [ys[i] - touch for i in range(1, len(vs)) if vs[i - 1] > 0 >= vs[i]]
     assert len(apexes) >= 6
     top = y0 - touch + g * dt**2 / 8
     for n, height in enumerate(apexes[:6], start=1):
         exact = top * e ** (2 * n)
         assert exact - g * dt**2 / 2 - 1e-12 <= height <= exact + 1e-12, (n, height, exact)
-    assert abs(sim.granule_positions()[0][0]) < 1e-12  # straight up and down: a flat edge
+    assert abs(sim.frame().granules.positions[0][0]) < 1e-12  # straight up and down: a flat edge
 
 
 @pytest.mark.parametrize("wall", ["steel", "beebread"])
@@ -450,7 +457,7 @@ def test_a_soft_granule_rests_on_a_drawn_floor_at_its_static_overlap(wall: str) 
     case = load_case(path, overrides=[*start, f"granules.placement.overlap={1.01 * delta}"])
     sim = _simulation(case)
     sim.run(0.05)
-    overlap = r - (sim.granule_positions()[0][1] + 0.2)
+    overlap = r - (sim.frame().granules.positions[0][1] + 0.2)
     assert overlap == pytest.approx(delta, rel=1e-6)
 
 
@@ -467,7 +474,9 @@ def _slip_decay(case: Case) -> tuple[float, float]:
     while sim.time < 0.006:
         sim.step()
         times.append(sim.time)
-        slips.append(sim.granule_velocities()[0][0] + sim.granule_angular_velocities()[0] * r)
+        slips.append(
+            sim.frame().granules.velocities[0][0] + sim.frame().granules.angular_velocities[0] * r
+        )
     t, u = np.array(times), np.abs(slips)
     peaks = [i for i in range(1, len(u) - 1) if u[i - 1] < u[i] >= u[i + 1]]
     assert len(peaks) >= 4

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from perga.cli import main
-from perga.runner import LEDGER_OFF, RunSummary, judge_ledger
+from perga.run.summary import LEDGER_OFF, RunSummary, judge_ledger
 
 ROOT = Path(__file__).resolve().parents[1]
 

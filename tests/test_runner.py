@@ -2,14 +2,15 @@
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from perga.case import load_case
+from perga.case import CaseError, load_case
 from perga.cli import main
-from perga.runner import RunStoppedError, prepare_directory, run_case
+from perga.run import RunStoppedError, prepare_directory, run_case
 from perga.stats.metrics import evaluate
 from perga.stats.tables import load_run
 
@@ -114,7 +115,7 @@ def test_separator_energy_ledger_closes_within_one_percent(tmp_path):
 def test_non_finite_state_stops_with_a_diagnostic(tmp_path):
     from perga.engine.simulation import Simulation
     from perga.model.from_case import scene_spec
-    from perga.runner import check_granules
+    from perga.run.guards import check_granules
 
     case = load_case(short_case(tmp_path))
     sim = Simulation(scene_spec(case))
@@ -144,3 +145,34 @@ def test_parquet_granule_table_holds_the_csv_values_and_serves_the_readers(tmp_p
     assert radius[0] == radius[1] and radius[0] > 0
     bad = ["run", str(case_path), "-o", str(tmp_path / "x"), "--quiet"]
     assert main([*bad, "--set", "output.granule_table=json"]) == 2
+
+
+def test_paraview_frames_have_their_own_trigger(tmp_path):
+    """output.vtk_every = 4 × output.every: the tables keep a frame every 1 ms, the ParaView
+    series one every 4 ms (and the last), each phase-locked to its own clock; the frames both
+    have are the same floats (one frame of the simulation each)."""
+    case_path = short_case(tmp_path, duration=0.02, every=0.001)
+    out = tmp_path / "run"
+    sets = ["--set", "output.vtk_every=0.004", "--set", 'output.record=["granules", "vtk"]']
+    assert main(["run", str(case_path), "-o", str(out), "--quiet", *sets]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    dt = summary["dt"]
+    table = sorted({float(r["time"]) for r in read(out / "granules.csv")})
+    series = (out / "vtk" / "granules.pvd").read_text()
+    vtk = sorted(float(t) for t in re.findall(r'timestep="([^"]+)"', series))
+    assert table[:21] == pytest.approx([k * 0.001 for k in range(21)], abs=dt)
+    assert vtk[:6] == pytest.approx([0.0, 0.004, 0.008, 0.012, 0.016, 0.020], abs=dt)
+    assert set(vtk) <= set(table)  # a ParaView frame falls on a table frame here
+    assert summary["frames"] == len(table)
+
+
+@pytest.mark.parametrize(("value", "taken"), [(1e-7, True), (0.99e-7, False)])
+def test_vtk_every_limit(value, taken):
+    """output.vtk_every >= 1e-7 s, as output.every."""
+    try:
+        load_case(SINGLE, overrides=[f"output.vtk_every={value!r}"])
+    except CaseError as exc:
+        assert not taken, exc
+        assert "output.vtk_every" in str(exc)
+    else:
+        assert taken

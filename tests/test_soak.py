@@ -16,7 +16,7 @@ SAMPLER = """
 import json, sys
 from pathlib import Path
 from perga.case import load_case
-from perga.runner import prepare_directory, run_case
+from perga.run import prepare_directory, run_case
 
 def rss():
     pages = int(Path("/proc/self/statm").read_text().split()[1])

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from perga.case import load_case
-from perga.runner import prepare_directory, run_case
+from perga.run import prepare_directory, run_case
 
 ROOT = Path(__file__).resolve().parents[1]
 SOFT = ROOT / "cases" / "soft-single-granule.toml"

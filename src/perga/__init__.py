@@ -7,7 +7,8 @@ The Python API (each name imported on first use, so that ``import perga`` stays 
     case = perga.load_case("cases/separator.toml", overrides=["rotor.rpm=2000"])  # checked
     sim = perga.Simulation(perga.scene_spec(case))   # the system, stepped in memory
     sim.run(0.05)                                     # s
-    sim.energy().closure, sim.granule_velocities()    # the ledger, SI arrays
+    frame = sim.frame()                               # the state now, read-only SI arrays
+    frame.energy.closure, frame.granules.velocities   # the ledger, the granules' velocities
 
     summary = perga.simulate("cases/separator.toml", "runs/sep", overrides=["solver.duration=0.1"])
     run = perga.load_run("runs/sep")                  # case, summary, tables as numpy columns
@@ -28,8 +29,8 @@ _API = {
     "CaseError": "perga.case",
     "scene_spec": "perga.model.from_case",
     "Simulation": "perga.engine.simulation",
-    "simulate": "perga.runner",
-    "RunSummary": "perga.runner",
+    "simulate": "perga.run",
+    "RunSummary": "perga.run",
     "load_run": "perga.stats.tables",
     "Run": "perga.stats.tables",
     "evaluate": "perga.stats.metrics",

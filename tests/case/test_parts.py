@@ -104,7 +104,7 @@ def _wall_hit(soft: bool, e: float, v0: float = 3.0, at_joint: float | None = No
     )
     sim = Simulation(spec)
     sim.run(2 * 0.002 / v0)
-    return float(sim.granule_velocities()[0] @ normal) / v0
+    return float(sim.frame().granules.velocities[0] @ normal) / v0
 
 
 @pytest.mark.parametrize("e", [0.5, 0.8])

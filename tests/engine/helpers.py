@@ -32,11 +32,11 @@ def plate(x0: float, x1: float, y0: float, y1: float, mass: float, **kwargs) -> 
 def rotating_frame(sim: Simulation, omega: float) -> tuple[float, float, float]:
     """Granule 0's radial coordinate (m), its velocity relative to the rotor along the rotor's
     x-axis (m/s), and its coordinate across it (m), in the rotor frame."""
-    theta = sim.rotor_angle()
+    theta = sim.frame().machine.rotor_angle
     ex = np.array([math.cos(theta), math.sin(theta)])
     ey = np.array([-math.sin(theta), math.cos(theta)])
-    p = sim.granule_positions()[0]
-    v = sim.granule_velocities()[0]
+    p = sim.frame().granules.positions[0]
+    v = sim.frame().granules.velocities[0]
     v_rel = v - omega * np.array([-p[1], p[0]])
     return float(p @ ex), float(v_rel @ ex), float(p @ ey)
 

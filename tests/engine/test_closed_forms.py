@@ -86,8 +86,8 @@ def test_oblique_impact_on_fixed_wall(v_t: float, e: float, f: float, sticks: bo
     sim.run(2e-5)
     exact = oblique_impact(m, RADIUS, v_n, v_t, e, f, shape="disc")
     assert exact.sticks is sticks
-    (v_after,) = sim.granule_velocities()
-    (spin,) = sim.granule_angular_velocities()
+    (v_after,) = sim.frame().granules.velocities
+    (spin,) = sim.frame().granules.angular_velocities
     assert v_after[0] == pytest.approx(exact.tangential_velocity, rel=TOLERANCE)
     assert v_after[1] == pytest.approx(exact.normal_velocity, rel=TOLERANCE)
     assert spin == pytest.approx(exact.spin, rel=TOLERANCE)

@@ -36,9 +36,9 @@ def state(sim: Simulation) -> list[np.ndarray]:
     machine's raw Chipmunk state (bodies, and joints' accumulated impulses)."""
     chipmunk = capture(sim.machine.space)
     return [
-        sim.granule_positions(),
-        sim.granule_velocities(),
-        sim.granule_angular_velocities(),
+        sim.frame().granules.positions,
+        sim.frame().granules.velocities,
+        sim.frame().granules.angular_velocities,
         chipmunk.bodies,
         chipmunk.joints,
     ]
@@ -64,7 +64,7 @@ def test_a_copied_soft_separator_steps_as_the_original_bit_for_bit(how: str) -> 
 def test_a_copied_rigid_separator_starts_from_the_same_state(how: str) -> None:
     """The rigid separator copied at 0.03 s: its granules and machine bit for bit the
     original's. (Its later steps may differ at round-off: Chipmunk's broad phase is rebuilt,
-    and with it the order the solver takes the contacts in; ``perga.checkpoints``.)"""
+    and with it the order the solver takes the contacts in; ``perga.run.checkpoints``.)"""
     sim = stepped("separator.toml", 0.03)
     for a, b in zip(state(sim), state(COPIES[how](sim)), strict=True):
         assert np.array_equal(a, b)

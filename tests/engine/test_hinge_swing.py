@@ -41,7 +41,7 @@ def test_swing_frequency() -> None:
     alpha = np.empty(n)
     for i in range(n):
         sim.step()
-        alpha[i] = sim.hammer_swing_angles()[0]
+        alpha[i] = sim.frame().machine.swing_angles[0]
     t = DT * np.arange(1, n + 1)
     down = np.nonzero((alpha[:-1] > 0) & (alpha[1:] <= 0))[0]
     crossings = t[down] + DT * alpha[down] / (alpha[down] - alpha[down + 1])

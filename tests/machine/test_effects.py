@@ -251,8 +251,8 @@ def test_air_drag_closed_form() -> None:
     )  # fmt: skip
     sim = Simulation(spec)
     sim.run(duration)
-    (v,) = sim.granule_velocities()
-    (p,) = sim.granule_positions()
+    (v,) = sim.frame().granules.velocities
+    (p,) = sim.frame().granules.positions
     assert v[1] == 0.0 and p[1] == 0.0
     assert v[0] == pytest.approx(v0 / (1 + k * v0 * duration), rel=1e-12)
     assert p[0] == pytest.approx(math.log1p(k * v0 * duration) / k, rel=1e-4)
@@ -285,11 +285,14 @@ def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:
         runs.append(Simulation(spec))
         runs[-1].run(4e-3)
     sim, open_rotor = runs
-    v = sim.granule_velocities()[0]
+    v = sim.frame().granules.velocities[0]
     assert v[0] * c + v[1] * s == pytest.approx(-2.5, rel=1e-12)
     assert sim.energy().contact_dissipation == pytest.approx(0.5 * 50e-6 * (25 - 6.25), rel=1e-9)
     # the hammer moves exactly as without the wall
-    assert sim.hammer_swing_angles().tolist() == open_rotor.hammer_swing_angles().tolist()
+    assert (
+        sim.frame().machine.swing_angles.tolist()
+        == open_rotor.frame().machine.swing_angles.tolist()
+    )
     assert len(sim.contacts.bodies.wall_shapes) == 96
 
 

@@ -87,11 +87,11 @@ def test_floor_friction_stops_a_granule() -> None:
     sim = Simulation(spec)
     sim.run(1.05 * v0 / (mu * g))
     ledger = sim.energy()
-    assert sim.granule_velocities()[0].tolist() == [0.0, 0.0]
+    assert sim.frame().granules.velocities[0].tolist() == [0.0, 0.0]
     assert ledger.friction == pytest.approx(0.5 * 50e-6 * v0**2, rel=1e-9)
     assert ledger.kinetic == 0.0
     assert abs(ledger.closure) < 1e-9
-    assert sim.granule_positions()[0, 0] == pytest.approx(v0**2 / (2 * mu * g), rel=1e-3)
+    assert sim.frame().granules.positions[0, 0] == pytest.approx(v0**2 / (2 * mu * g), rel=1e-3)
 
 
 def _hammer_scene(mount: str, dt: float, effects: EffectsSpec | None = None) -> Simulation:
@@ -229,11 +229,11 @@ def test_drive_work_while_the_rotor_speed_changes() -> None:
     sim.run(2e-3)
     assert len(sim.impacts) == 1
     moment = inertia + hammer.moment_about_hinge + mass * (R**2 + 2 * R * hammer.centre_of_mass[0])
-    t_a, w_a, work_a = sim.time, sim.rotor_angular_velocity(), sim.energy().drive_work
+    t_a, w_a, work_a = sim.time, sim.frame().machine.rotor_angular_velocity, sim.energy().drive_work
     assert w_a < 90.0  # the strike took more than 10 rad/s
     sim.run(3e-3)
     assert len(sim.impacts) == 1  # nothing touched the hammer since
-    t_b, w_b, work_b = sim.time, sim.rotor_angular_velocity(), sim.energy().drive_work
+    t_b, w_b, work_b = sim.time, sim.frame().machine.rotor_angular_velocity, sim.energy().drive_work
     assert w_b - w_a == pytest.approx(torque * (t_b - t_a) / moment, rel=1e-9)
     assert work_b - work_a == pytest.approx(0.5 * moment * (w_b**2 - w_a**2), rel=1e-9)
     assert abs(sim.energy().closure) < 1e-9
@@ -327,11 +327,11 @@ def test_in_plane_gravity_is_booked_to_the_step_split(mount: str) -> None:
         gravity=tuple(g),
     )
     sim = Simulation(spec)
-    v0 = sim.hammer_velocities()[0]
+    v0 = sim.frame().machine.velocities[0]
     sim.run(steps * dt)
     assert sim.time == pytest.approx(steps * dt, rel=1e-12)
     ledger = sim.energy()
-    split = -0.5 * mass * dt * g @ (sim.hammer_velocities()[0] - v0)
+    split = -0.5 * mass * dt * g @ (sim.frame().machine.velocities[0] - v0)
     assert abs(ledger.residual - split) < 1e-12 * ledger.energy_in_play
     if mount == "free":
         assert ledger.gravity_work == pytest.approx(

@@ -36,13 +36,13 @@ def test_granule_collisions_off_leaves_no_handler_and_granules_pass() -> None:
     sim = _head_on(False, ())
     assert sim.contacts.bodies.pairs == []
     # exact: no contact ever touches them, velocities are untouched
-    assert sim.granule_velocities()[:, 0].tolist() == [5.0, -5.0]
+    assert sim.frame().granules.velocities[:, 0].tolist() == [5.0, -5.0]
 
 
 def test_granule_collisions_on_bounce_with_pair_restitution() -> None:
     sim = _head_on(True, (ContactSpec("bb", "bb", restitution=0.5, friction=0.2),))
     # equal masses, e = 0.5: each leaves at e·5 m/s backwards (exact to rounding)
-    assert sim.granule_velocities()[:, 0] == pytest.approx([-2.5, 2.5], rel=1e-12)
+    assert sim.frame().granules.velocities[:, 0] == pytest.approx([-2.5, 2.5], rel=1e-12)
 
 
 def test_missing_and_unused_pairs_are_errors() -> None:
@@ -86,7 +86,7 @@ def test_hinged_hammer_pose_and_mass_properties() -> None:
     assert body.moment * 1e-9 == pytest.approx(hammer.moment_about_centre, rel=1e-12)
     assert tuple(body.position * 1e-3) == pytest.approx((R * math.cos(phi), R * math.sin(phi)))
     assert body.angular_velocity * 1e3 == pytest.approx(omega, rel=1e-12)
-    assert sim.hammer_swing_angles()[0] == pytest.approx(0.1, rel=1e-12)
+    assert sim.frame().machine.swing_angles[0] == pytest.approx(0.1, rel=1e-12)
     # the pivot joint is in the space, and there are no collision handlers without granules
     assert len(sim.machine.hinges) == 1
     assert sim.contacts.bodies.pairs == []  # type: ignore[attr-defined]

@@ -39,7 +39,7 @@ from perga.output.vtk import (
     PvdSeries,
     VtkRecorder,
 )
-from perga.runner import prepare_directory, run_case
+from perga.run import prepare_directory, run_case
 
 CASES = Path(__file__).parents[2] / "cases"
 FRAMES = 12
@@ -144,18 +144,18 @@ def snapshot(sim: Simulation) -> Frame:
     counts = np.bincount([i.granule for i in sim.impacts], minlength=len(sim.spec.granules))
     return Frame(
         time=sim.time,
-        positions=sim.granule_positions(),
-        velocities=sim.granule_velocities(),
-        angular_velocities=sim.granule_angular_velocities(),
+        positions=sim.frame().granules.positions,
+        velocities=sim.frame().granules.velocities,
+        angular_velocities=sim.frame().granules.angular_velocities,
         hammer_vertices=[
             np.array([tuple(b.local_to_world(v)) for v in outline]) * u.LENGTH
             for b, outline in zip(machine.hammer_bodies, machine.hammer_outlines, strict=True)
         ],
-        swing_angles=sim.hammer_swing_angles(),
-        hammer_spin=sim.hammer_angular_velocities(),
+        swing_angles=sim.frame().machine.swing_angles,
+        hammer_spin=sim.frame().machine.angular_velocities,
         hinge_force=hinge_forces(sim),
-        rotor_angle=sim.rotor_angle(),
-        rotor_spin=sim.rotor_angular_velocity(),
+        rotor_angle=sim.frame().machine.rotor_angle,
+        rotor_spin=sim.frame().machine.rotor_angular_velocity,
         impacts=counts,
         soft=soft_expected(sim) if sim.spec.contact_model.kind != "rigid" else {},
     )

@@ -10,7 +10,7 @@ import pytest
 
 from perga.analytic.impact import oblique_impact
 from perga.case import load_case
-from perga.runner import prepare_directory, run_case
+from perga.run import prepare_directory, run_case
 from perga.stats import load_run
 from perga.stats.metrics import METRICS, MetricUnavailableError, evaluate, parse_metric
 

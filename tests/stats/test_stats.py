@@ -15,7 +15,7 @@ import pytest
 
 from perga.analytic.impact import impact_efficiencies, normal_impact
 from perga.case import load_case
-from perga.runner import prepare_directory, run_case
+from perga.run import prepare_directory, run_case
 from perga.stats import Run, load_run
 from perga.stats.energy import impact_speed_histogram, impact_stats, successive_energies
 from perga.stats.sweeps import efficiency_point

@@ -123,6 +123,11 @@ class Simulation:
         """Simulated time, s."""
         return self.steps * self.dt
 
+    @property
+    def threads(self) -> int:
+        """The most CPU threads the contact model's steps have used at once."""
+        return self.contacts.threads
+
     def step(self) -> None:
         """Advance by one machine step dt."""
         end = (self.steps + 1) * self.dt
@@ -293,13 +298,13 @@ class Simulation:
             granules=granules,
             machine=self.machine.frame(self.dt),
             energy=None if self.meter is None else self.energy(),
+            impacts=len(self.impacts),
             fed=self.fed,
             departed=0 if self.outlet is None else len(self.outlet.departures),
+            broken=0 if self.damage is None else len(self.damage.broken),
             removed_broken=self.removed_broken,
             released=len(self.contacts.releases),
         )
-
-    # --- state in SI ---------------------------------------------------------------------------
 
     def events(self) -> Events:
         """The impacts, releases and departures so far (views of the growing lists)."""
@@ -308,37 +313,3 @@ class Simulation:
             self.contacts.releases,
             () if self.outlet is None else self.outlet.departures,
         )
-
-    def granule_positions(self) -> FloatArray:
-        """Granule centres, (n, 2) array, m."""
-        return self.contacts.granule_state().positions
-
-    def granule_velocities(self) -> FloatArray:
-        """Granule centre velocities, (n, 2) array, m/s."""
-        return self.contacts.granule_state().velocities
-
-    def granule_angular_velocities(self) -> FloatArray:
-        """Granule angular velocities, (n,) array, rad/s."""
-        return self.contacts.granule_state().angular_velocities
-
-    def rotor_angle(self) -> float:
-        """Rotor angle, rad (ω·t at constant ω)."""
-        return float(self.machine.rotor.angle)
-
-    def rotor_angular_velocity(self) -> float:
-        """Rotor angular velocity, rad/s (varies only with a driven rotor)."""
-        return float(self.machine.rotor.angular_velocity) * u.ANGULAR_VELOCITY
-
-    def hammer_swing_angles(self) -> FloatArray:
-        """α of each hammer: its axis angle relative to the radial line through the hinge on
-        the turning rotor, rad (constant for welded hammers)."""
-        return self.machine.frame(self.dt).swing_angles.copy()
-
-    def hammer_angular_velocities(self) -> FloatArray:
-        """Absolute angular velocity of each hammer, (n,) array, rad/s (welded: the rotor's)."""
-        return self.machine.frame(self.dt).angular_velocities.copy()
-
-    def hammer_velocities(self) -> FloatArray:
-        """Centre-of-mass velocity of each hammer, (n, 2) array, m/s (welded: the rotor's
-        velocity at the hammer's centre of mass)."""
-        return self.machine.frame(self.dt).velocities.copy()

@@ -58,12 +58,6 @@ class GranuleFrame:
         """|v|, m/s."""
         return np.hypot(self.velocities[:, 0], self.velocities[:, 1])
 
-    @property
-    def kinetic_energies(self) -> FloatArray:
-        """½mv² + ½Iω² per granule, J."""
-        v2 = np.sum(self.velocities**2, axis=1)
-        return 0.5 * self.masses * v2 + 0.5 * self.inertia * self.angular_velocities**2
-
 
 @dataclass(frozen=True)
 class MachineFrame:
@@ -99,16 +93,18 @@ class MachineFrame:
 @dataclass(frozen=True)
 class Frame:
     """The simulation at time ``time`` (s) after ``step`` machine steps: its granules, its
-    machine and, where the run measures it, the energy ledger since t = 0; the process's
-    counts: granules fed in all (those at t = 0 included), gone through the outlet, removed
-    broken, released from their cells."""
+    machine and, where the run measures it, the energy ledger since t = 0; the counts so far:
+    granule-hammer impacts, granules fed in all (those at t = 0 included), gone through the
+    outlet, drawn broken, removed broken, released from their cells."""
 
     time: float
     step: int
     granules: GranuleFrame
     machine: MachineFrame
     energy: EnergyLedger | None = None
+    impacts: int = 0
     fed: int = 0
     departed: int = 0
+    broken: int = 0
     removed_broken: int = 0
     released: int = 0

@@ -29,7 +29,7 @@ class Recorder(Protocol):
     """What the runner needs of a recorder: built as ``Recorder(directory, spec)``,
     ``record(frame, events)`` at each frame and ``close(complete)`` at the end of the run,
     whatever ended it; pickled with a checkpoint, it goes on from the state its files had then
-    (:mod:`perga.checkpoints`)."""
+    (:mod:`perga.run.checkpoints`)."""
 
     def record(self, frame: Frame, events: Events) -> None:
         """Append what this recorder keeps of ``frame`` and of ``events`` (all so far)."""
@@ -57,6 +57,10 @@ class PhaseLock:
             raise ValueError(f"every must be > 0 s (got {every})")
         self.every = every
         self.frame = 0
+
+    def is_due(self, t: float) -> bool:
+        """Whether the next frame is due at time t (k does not advance)."""
+        return not self._early(t)
 
     def due(self, t: float) -> bool:
         """True if frame k is due at time t (then k advances past t)."""

@@ -99,7 +99,7 @@ class _RunUnpickler(pickle.Unpickler):
 @contextmanager
 def _no_collection() -> Iterator[None]:
     """Python's cyclic garbage collector held off: (un)pickling makes many objects, and the
-    collections they trigger cost more than the pickling (0.1 s of a 0.13 s read, measured)."""
+    collections they trigger would cost more than the pickling (docs/reliability.md)."""
     enabled = gc.isenabled()
     gc.disable()
     try:

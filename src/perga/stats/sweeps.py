@@ -4,7 +4,6 @@ mass (SI units)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,9 +75,3 @@ def efficiency_point(run: Run) -> EfficiencyPoint:
         relative=s.relative,
         hammer_frame_loss=s.normal_loss,
     )
-
-
-def efficiency_sweep(runs: Sequence[Run]) -> list[EfficiencyPoint]:
-    """:func:`efficiency_point` of every run, sorted by granule mass then hammer mass."""
-    points = [efficiency_point(r) for r in runs]
-    return sorted(points, key=lambda p: (p.granule_mass, p.hammer_mass))

@@ -139,10 +139,10 @@ def measure_restitution(case: Case, duration: float) -> Measured:
     stepper = Stepper(simulation(case))
     (v_in,) = np.array(case.granules.placement.velocities, dtype=float)
     _run_to(stepper, duration)
-    sim = stepper.sim
-    x = float(sim.granule_positions()[0, 0])
+    granules = stepper.sim.frame(contacts=False).granules
+    x = float(granules.positions[0, 0])
     face = case.rotor.angular_velocity * x  # ω ẑ × r, its y component (r_y ≪ r_x, ω tiny)
-    e_sim = -(float(sim.granule_velocities()[0, 1]) - face) / (float(v_in[1]) - face)
+    e_sim = -(float(granules.velocities[0, 1]) - face) / (float(v_in[1]) - face)
     e = case.granule_hammer_contact.restitution
     return _finish(stepper, {"restitution": abs(e_sim / e - 1.0)})
 
@@ -150,9 +150,10 @@ def measure_restitution(case: Case, duration: float) -> Measured:
 def _along_blade(sim: Simulation, omega: float) -> tuple[float, float]:
     """Granule 0's coordinate along the blade (m) and its velocity relative to the blade along
     it (m/s)."""
-    theta = sim.rotor_angle()
+    frame = sim.frame(contacts=False)
+    theta = frame.machine.rotor_angle
     ex = np.array([math.cos(theta), math.sin(theta)])
-    p, v = sim.granule_positions()[0], sim.granule_velocities()[0]
+    p, v = frame.granules.positions[0], frame.granules.velocities[0]
     v_rel = v - omega * np.array([-p[1], p[0]])
     return float(p @ ex), float(v_rel @ ex)
 
@@ -183,7 +184,8 @@ def measure_hinged(case: Case, duration: float) -> Measured:
     _run_to(stepper, duration)
     sim = stepper.sim
     exact = hinged_reference(case)
-    error = float(np.hypot(*(sim.granule_velocities()[0] - exact)) / np.hypot(*exact))
+    v = sim.frame(contacts=False).granules.velocities[0]
+    error = float(np.hypot(*(v - exact)) / np.hypot(*exact))
     return _finish(stepper, {"hinged": error, "energy": abs(sim.energy().closure)})
 
 
@@ -207,7 +209,7 @@ def measure_bounce(case: Case, duration: float) -> Measured:
     worst = 0.0
     for _ in range(math.ceil(duration / sim.dt - 1e-9)):
         stepper.step()
-        y = float(sim.granule_positions()[0, 1])
+        y = float(sim.frame(contacts=False).granules.positions[0, 1])
         worst = max(worst, abs(y - reference.height(sim.time)))
     return _finish(stepper, {"trajectory": worst / BOUNCE["drop"]})
 

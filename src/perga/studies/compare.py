@@ -726,7 +726,7 @@ def _blade_jobs(path: Path) -> list[Job]:
 
 def _run_job(job: Job, work: Path) -> Path:
     """Write the job's case and run it into work/runs/NAME (reused if completed already)."""
-    from perga.runner import FINISHED, prepare_directory, run_case
+    from perga.run import FINISHED, prepare_directory, run_case
 
     case_path = work / "cases" / f"{job.name}.toml"
     directory = work / "runs" / job.name

@@ -122,7 +122,7 @@ def run_job(job: Job) -> dict[str, Any]:
     directory (``row.json``) once the run has ended, whatever ended it."""
     import numba
 
-    from perga.runner import prepare_directory, run_case
+    from perga.run import prepare_directory, run_case
     from perga.stats.metrics import MetricUnavailableError, evaluate
     from perga.stats.tables import load_run
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from perga.output.figures import new_figure, save
 from perga.output.render import render
-from perga.runner import ledger_closure_text
+from perga.run.summary import ledger_closure_text
 from perga.stats.tables import Run, load_run
 
 ENERGY_TERMS = ("drive_work", "contact_dissipation", "friction", "drag", "joint_correction",

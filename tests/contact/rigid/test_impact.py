@@ -44,8 +44,12 @@ def test_free_two_body_impact(m: float, M: float, e: float) -> None:
     sim = Simulation(spec)
     sim.run(2e-5)
     exact = normal_impact(m, M, 0.0, V, e)
-    assert sim.granule_velocities()[0, 1] == pytest.approx(exact.granule_velocity, rel=RTOL_IMPULSE)
-    assert sim.hammer_velocities()[0, 1] == pytest.approx(exact.hammer_velocity, rel=RTOL_IMPULSE)
+    assert sim.frame().granules.velocities[0, 1] == pytest.approx(
+        exact.granule_velocity, rel=RTOL_IMPULSE
+    )
+    assert sim.frame().machine.velocities[0, 1] == pytest.approx(
+        exact.hammer_velocity, rel=RTOL_IMPULSE
+    )
     (impact,) = sim.impacts
     assert (impact.granule, impact.hammer) == (0, 0)
     assert impact.normal_velocity_before == pytest.approx(-V, rel=RTOL_IMPULSE)
@@ -85,7 +89,7 @@ def test_restitution_is_the_pairs_not_the_product() -> None:
     )
     sim = Simulation(spec)
     sim.run(1e-4)
-    after = sim.granule_velocities()[:, 1]
+    after = sim.frame().granules.velocities[:, 1]
     assert after[0] == pytest.approx(-0.55 * v, rel=1e-12)
     assert after[1] == pytest.approx(-0.8 * v, rel=1e-12)
     by_granule = {i.granule: i for i in sim.impacts}
@@ -125,7 +129,7 @@ def test_hinged_hammer_on_kinematic_rotor() -> None:
     # the impact row's pre-impact state: Ω before the impulses, α after the step's drift
     assert impact.hammer_angular_velocity_before == pytest.approx(spin_before, rel=1e-12)
     assert impact.hammer_swing_angle_before == pytest.approx(
-        sim.hammer_swing_angles()[0], rel=1e-12, abs=1e-15
+        sim.frame().machine.swing_angles[0], rel=1e-12, abs=1e-15
     )
     assert impact.granule_velocity_before == (0.0, 0.0)
     # positions have already advanced in the impact step (step order), velocities have not
@@ -143,7 +147,9 @@ def test_hinged_hammer_on_kinematic_rotor() -> None:
         v_g=(0.0, 0.0),
         e=e,
     )
-    np.testing.assert_allclose(sim.granule_velocities()[0], exact.granule_velocity, rtol=1e-5)
+    np.testing.assert_allclose(
+        sim.frame().granules.velocities[0], exact.granule_velocity, rtol=1e-5
+    )
     assert impact.normal_impulse == pytest.approx(exact.impulse, rel=1e-5)
 
 
@@ -186,7 +192,7 @@ def test_two_pieces_of_one_hammer_give_one_impact() -> None:
     (merged,) = pieces.impacts
     assert merged.normal_impulse == pytest.approx(one.normal_impulse, rel=1e-9)
     np.testing.assert_allclose(
-        pieces.granule_velocities(), whole.granule_velocities(), rtol=1e-9, atol=1e-12
+        pieces.frame().granules.velocities, whole.frame().granules.velocities, rtol=1e-9, atol=1e-12
     )
 
 

@@ -51,8 +51,8 @@ def test_a_soft_impact_record_is_the_granules_motion() -> None:
     assert impact.normal_velocity_before == pytest.approx(before @ n, rel=1e-12)
     assert impact.tangential_velocity_before == pytest.approx(before @ t, rel=1e-12)
 
-    v, (w,) = sim.granule_velocities()[0], sim.granule_angular_velocities()
-    after = v - _face(sim.granule_positions()[0] - r * n)
+    v, (w,) = sim.frame().granules.velocities[0], sim.frame().granules.angular_velocities
+    after = v - _face(sim.frame().granules.positions[0] - r * n)
     assert abs(w) > 100.0  # the friction set it spinning: the spin terms below count
     assert impact.normal_velocity_after == pytest.approx(after @ n, rel=AFTER)
     assert impact.tangential_velocity_after == pytest.approx(after @ t - w * r, rel=AFTER)

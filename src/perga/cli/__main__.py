@@ -1,0 +1,7 @@
+"""``python -m perga.cli``: the ``perga`` command."""
+
+import sys
+
+from perga.cli import main
+
+sys.exit(main())

@@ -1,0 +1,151 @@
+"""What ``perga run`` is asked: a case (with overrides, or started from another run's granules)
+into a directory, or a stopped run to go on with; checked, its case loaded and its directory
+ready (:func:`prepare`), then run (:func:`execute`), and the outcome in words
+(:func:`outcome`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from perga.case import load_case
+from perga.case.schema import Case
+from perga.run.checkpoints import CheckpointError
+from perga.run.directory import prepare_directory
+from perga.run.loop import Progress, resume_run, run_case
+from perga.run.restart import RunStateError, case_from_run, check_resumable
+from perga.run.summary import LEDGER_OFF, RunSummary, ledger_closure_text
+
+
+class BadRequestError(Exception):
+    """A request that cannot be run; the message says why (exit status 2)."""
+
+
+@dataclass(frozen=True)
+class Request:
+    """``perga run``'s arguments: ``case`` (a case file) or ``resume`` (a run directory), the
+    ``output`` directory (default ``output.directory``), ``overwrite``, the ``overrides``
+    (``KEY=VALUE``) and ``start_from`` (``RUN[:TIME]``, perga run --from)."""
+
+    case: Path | None = None
+    resume: Path | None = None
+    output: Path | None = None
+    overwrite: bool = False
+    overrides: tuple[str, ...] = ()
+    start_from: str | None = None
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A request ready to run: its case and directory (``resume``: go on with the run there)."""
+
+    request: Request
+    case: Case
+    directory: Path
+
+    @property
+    def resume(self) -> bool:
+        """Whether this goes on with a stopped run."""
+        return self.request.resume is not None
+
+
+def load(request: Request) -> Case:
+    """The request's case, checked (BadRequestError; CaseError for a bad case file)."""
+    r = request
+    if (r.case is None) == (r.resume is None):
+        raise BadRequestError("perga run needs a CASE or --resume RUN (one of them)")
+    if r.resume is not None:
+        if r.overrides or r.output or r.overwrite or r.start_from:
+            raise BadRequestError(
+                "--resume RUN goes on with the run as it was: no --set, -o, --overwrite, --from"
+            )
+        if not (r.resume / "case.toml").is_file():
+            raise BadRequestError(f"{r.resume} is not a perga run (it has no case.toml)")
+        return load_case(r.resume / "case.toml")
+    assert r.case is not None
+    if r.start_from is not None:
+        try:
+            return case_from_run(r.case, list(r.overrides), r.start_from)
+        except RunStateError as exc:
+            raise BadRequestError(str(exc)) from None
+    return load_case(r.case, overrides=r.overrides)
+
+
+def prepare(request: Request, case: Case) -> Prepared:
+    """The run directory of ``request`` made ready for ``case`` (:func:`load`'s):
+    BadRequestError for a parameter set, a run with nothing to resume, or a directory that
+    holds a run (without ``overwrite``) or cannot be made."""
+    if case.chamber is None:  # a parameter set (for paper-check), not a scene
+        raise BadRequestError(
+            f"{request.case}: [chamber] is missing: perga run needs the wall around the rotor "
+            "(a case without one is a parameter set for perga paper-check)"
+        )
+    if request.resume is not None:
+        try:
+            check_resumable(request.resume)
+        except CheckpointError as exc:
+            raise BadRequestError(f"cannot resume: {exc}") from None
+        return Prepared(request, case, request.resume)
+    assert request.case is not None
+    directory = request.output or Path(case.output.directory.format(case=request.case.stem))
+    try:
+        prepare_directory(directory, request.overwrite)
+    except FileExistsError as exc:
+        raise BadRequestError(str(exc)) from None
+    except OSError as exc:  # a file in the way, no permission, a read-only file system
+        raise BadRequestError(
+            f"cannot make the run directory {directory}: {exc.strerror or exc}; choose another "
+            "-o DIR"
+        ) from None
+    return Prepared(request, case, directory)
+
+
+def execute(prepared: Prepared, progress: Progress | None = None) -> RunSummary:
+    """Run (or go on with) the prepared run; the summary. BadRequestError where the run's
+    checkpoints cannot be used; a stop signal, RunStoppedError or OSError (the run's output
+    cannot be written) propagate, everything written so far kept."""
+    if prepared.resume:
+        try:
+            return resume_run(prepared.case, prepared.directory, progress)
+        except CheckpointError as exc:
+            raise BadRequestError(f"cannot resume: {exc}") from None
+    request = prepared.request
+    assert request.case is not None
+    return run_case(
+        prepared.case, request.case, prepared.directory, progress, request.start_from or ""
+    )
+
+
+def outcome(summary: RunSummary, directory: Path) -> tuple[list[str], list[str], int]:
+    """What a finished run says: lines for stdout, lines for stderr and the exit status (0, or
+    3 for a run whose energy ledger is off)."""
+    status = summary.status
+    if status == LEDGER_OFF:
+        status = f"completed, ledger off by {summary.energy['closure']:+.2%}"
+    out = [
+        f"{status}: {summary.steps} steps, {summary.simulated_time:.4g} s simulated in "
+        f"{summary.wall_time:.3g} s, {summary.impacts} impacts -> {directory}"
+    ]
+    pop = summary.population
+    if pop and (pop["fed"] != summary.granules or pop["released"] or pop["departed"]):
+        out.append(
+            f"granules: {pop['fed']} fed, {pop['released']} released from cells, "
+            f"{pop['departed']} departed, {pop['broken']} broken, {pop['present']} present"
+        )
+    facts = []
+    if summary.energy:
+        facts.append(f"energy ledger closes to {ledger_closure_text(summary.energy)}")
+    if summary.speeds:
+        facts.append(
+            f"granule speeds at the end {summary.speeds['mean']:.3g} m/s mean, "
+            f"{summary.speeds['max']:.3g} max"
+        )
+    out.append("; ".join([*facts, f"figures: perga report {directory}"]))
+    state = directory / "vtk" / "paraview_state.py"
+    if state.exists():
+        out.append(f"ParaView: paraview --state={state}")
+    err = [f"warning: {w}" for w in summary.warnings]
+    if summary.status == LEDGER_OFF:
+        err.append(f"error: {summary.reason}")
+        return out, err, 3
+    return out, err, 0
