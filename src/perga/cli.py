@@ -475,6 +475,7 @@ def _sweep(args: argparse.Namespace) -> int:
 def _window(args: argparse.Namespace) -> int:
     from perga.studies.study_file import StudyError
     from perga.studies.window import in_window, run_window, window_study
+    from perga.studies.window_report import write_maps, write_report
 
     try:
         window = window_study(
@@ -492,6 +493,8 @@ def _window(args: argparse.Namespace) -> int:
         args,
         lambda progress: run_window(window, args.output, progress=progress, **_cluster(args)),
     )
+    write_maps(result, args.output)
+    write_report(result, args.output)
     best = result.best.point
     if best is None:
         verdict = "no point gave both a release and a damage fraction"
@@ -520,12 +523,13 @@ def _window(args: argparse.Namespace) -> int:
 def _calibrate(args: argparse.Namespace) -> int:
     from perga.case import load_case
     from perga.studies.calibrate import calibrate
+    from perga.studies.calibrate_report import write_plots
     from perga.studies.study_file import StudyError
 
     load_case(args.case)  # the case itself first: its problems are a case file's
     start = time.perf_counter()
     try:
-        fit = calibrate(
+        result = calibrate(
             args.case,
             args.data,
             args.fit,
@@ -537,6 +541,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         )
     except StudyError as exc:
         return _problems(exc.problems)
+    write_plots(result, args.output)
+    fit = result.fit
     for key, value, (lo, hi) in zip(fit.keys, fit.values, fit.intervals, strict=True):
         print(f"{key} = {value:.6g}  (95 %: {lo:.6g} to {hi:.6g})")
     print(
