@@ -25,8 +25,9 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from perga.studies.design import axis
+from perga.studies.executor import Progress
 from perga.studies.study_file import Study, StudyError, study_from_options
-from perga.studies.sweep import Progress, sweep
+from perga.studies.sweep import sweep
 
 METRICS = ("released_fraction", "damaged_fraction", "throughput", "energy_per_kg")
 """The window's metrics, in their order in the table."""
