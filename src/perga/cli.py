@@ -333,9 +333,10 @@ def _render(args: argparse.Namespace) -> int:
 def _compare(args: argparse.Namespace) -> int:
     from perga.case import load_case
     from perga.stats import load_run
-    from perga.studies.compare import analyse, run_paper_study
+    from perga.studies.compare import analyse
     from perga.studies.compare_report import write_report
     from perga.studies.paper_check import Params
+    from perga.studies.paper_runs import PaperRunsFailedError, run_paper_study
 
     if not args.runs and not args.paper:
         print("error: give run directories or --paper", file=sys.stderr)
@@ -351,10 +352,18 @@ def _compare(args: argparse.Namespace) -> int:
     if args.paper:
         work = args.work or out / "runs"
         bar = progress_bar(0, "runs", "perga compare --paper", args.quiet)
+        unfinished: list[str] = []
         try:
-            runs += run_paper_study(fitted.parent, work, args.processes, counted(bar))
+            runs += run_paper_study(fitted.parent, work, progress=counted(bar), **_cluster(args))
+        except PaperRunsFailedError as exc:
+            unfinished = exc.failed
         finally:
             bar.close()
+        for run in unfinished:
+            print(f"error: the paper run {run}", file=sys.stderr)
+        if unfinished:
+            print("--retry-failed runs them again", file=sys.stderr)
+            return 1
     analyses = analyse(runs, Params.from_case(load_case(fitted)))
     command = "perga compare " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["compare"] else ""
     data = write_report(analyses, out, Params.from_case(load_case(fitted)), command)
@@ -409,8 +418,13 @@ def _at_least_one(text: str) -> int:
 
 
 def _study_options(parser: argparse.ArgumentParser) -> None:
-    """The options a study on Dask shares (``_cluster``, replicates' seeds, progress)."""
+    """The options a study with replicates shares: their seeds, and ``_cluster_options``."""
     parser.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
+    _cluster_options(parser)
+
+
+def _cluster_options(parser: argparse.ArgumentParser) -> None:
+    """The options of runs on Dask (``_cluster``) and their progress."""
     parser.add_argument(
         "--workers", type=_at_least_one, help="local worker processes, >= 1 (default: free cores)"
     )
@@ -662,8 +676,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     compare.add_argument("-o", "--output", type=Path, help="report folder (default reports/...)")
     compare.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
-    compare.add_argument("--processes", type=int, default=2, help="--paper runs in parallel")
-    compare.add_argument("--quiet", action="store_true", help="no progress")
+    _cluster_options(compare)
     compare.set_defaults(handler=_compare)
     sweep = sub.add_parser(
         "sweep",
