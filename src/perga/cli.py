@@ -672,7 +672,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     compare.add_argument("runs", nargs="*", type=Path, metavar="RUN", help="run directories")
     compare.add_argument(
-        "--paper", action="store_true", help="run the bundled paper cases and sweeps first"
+        "--paper",
+        action="store_true",
+        help="run the bundled paper cases and sweeps first (on Dask, as a sweep's runs)",
     )
     compare.add_argument("-o", "--output", type=Path, help="report folder (default reports/...)")
     compare.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
