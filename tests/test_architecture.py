@@ -218,6 +218,59 @@ def test_the_rules_allow_what_the_architecture_allows(module: str, name: str) ->
     assert violations([(module, 1, name)]) == []
 
 
+def report_violations(found: list[tuple[str, int, str]]) -> list[str]:
+    """The imports among (module, line, imported name) of a report module
+    (``perga.studies.*_report``) by a study module (any other module of ``perga.studies``): a
+    study returns its results and the caller hands them to the report (a report may import
+    its study's types)."""
+    bad = []
+    for module, line, name in found:
+        target = module_named(name)
+        study = module.startswith("perga.studies.") and not module.endswith("_report")
+        if study and target.startswith("perga.studies.") and target.endswith("_report"):
+            bad.append(f"{module}:{line} imports {name} (a study never imports a report)")
+    return bad
+
+
+def test_no_study_module_imports_a_report() -> None:
+    found = [(m, line, name) for path, m in modules() for line, name in imports(path, m)]
+    assert any(module_named(n).endswith("_report") for _, _, n in found)  # reports are seen
+    assert report_violations(found) == []
+
+
+@pytest.mark.parametrize(
+    ("module", "name"),
+    [
+        ("perga.studies.calibrate", "perga.studies.calibrate_report.write_plots"),
+        ("perga.studies.window", "perga.studies.window_report.write_maps"),
+        ("perga.studies.compare", "perga.studies.compare_report.write_report"),
+        ("perga.studies.sweep", "perga.studies.sweep_report.write_plots"),
+    ],
+)
+def test_the_report_rule_catches_a_study_importing_its_report(module: str, name: str) -> None:
+    assert report_violations([(module, 1, name)]), (module, name)
+
+
+def test_the_report_rule_sees_an_import_inside_a_function(tmp_path: Path) -> None:
+    """The form the rule replaced: calibrate imported its report lazily, in a function."""
+    source = tmp_path / "calibrate.py"
+    source.write_text("def calibrate():\n    from perga.studies.calibrate_report import x\n")
+    found = [
+        ("perga.studies.calibrate", line, n)
+        for line, n in imports(source, "perga.studies.calibrate")
+    ]
+    assert report_violations(found) == [
+        "perga.studies.calibrate:2 imports perga.studies.calibrate_report.x "
+        "(a study never imports a report)"
+    ]
+
+
+def test_a_report_may_import_its_study() -> None:
+    assert (
+        report_violations([("perga.studies.window_report", 1, "perga.studies.window.Point")]) == []
+    )
+
+
 def _calls(tree: ast.AST):
     return [n for n in ast.walk(tree) if isinstance(n, ast.Call)]
 

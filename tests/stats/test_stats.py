@@ -114,3 +114,5 @@ def test_real_two_body_run_matches_every_efficiency(tmp_path: Path) -> None:
     model = impact_efficiencies(p.granule_mass, p.hammer_mass, p.restitution)
     for name in ("transfer", "relative", "dissipated", "hammer_frame_loss"):
         assert getattr(p, name) == pytest.approx(getattr(model, name), rel=1e-9), name
+    assert run.name == "run"  # its directory's, unless labelled
+    assert load_run(directory, "two-body-M20g").name == "two-body-M20g"

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from perga.cli import main
-from perga.studies.calibrate import calibrate
+from perga.studies.calibrate import Calibration, Data, Fit, calibrate
+from perga.studies.calibrate_report import write_plots
 from perga.studies.study_file import Parameter, Study
 from perga.studies.sweep import sweep
 from tests.figure_data import lines, saved_figures
@@ -48,7 +49,9 @@ def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> Non
     _synthetic(data, tmp_path / "truth", seed=11)
     out = tmp_path / "fit"
     saved = saved_figures(monkeypatch)
-    fit = calibrate(CASE, data, FITS, out, workers=2)
+    result = calibrate(CASE, data, FITS, out, workers=2)
+    write_plots(result, out)
+    fit = result.fit
     for key, (lo, hi), value in zip(fit.keys, fit.intervals, fit.values, strict=True):
         assert lo < TRUE[key] < hi, (key, lo, hi)
         assert hi - lo < 0.05 and abs(value - TRUE[key]) < 0.03
@@ -76,7 +79,9 @@ def test_bayes_posterior_covers_known_values(tmp_path: Path) -> None:
     """emcee from the least-squares optimum: the 95 % posterior intervals hold the known values."""
     data = tmp_path / "measured.csv"
     _synthetic(data, tmp_path / "truth", seed=12)
-    fit = calibrate(CASE, data, FITS, tmp_path / "fit", method="bayes", steps=40, workers=2)
+    result = calibrate(CASE, data, FITS, tmp_path / "fit", method="bayes", steps=40, workers=2)
+    write_plots(result, tmp_path / "fit")
+    fit = result.fit
     for key, (lo, hi) in zip(fit.keys, fit.intervals, strict=True):
         assert lo < TRUE[key] < hi, (key, lo, hi)
     assert (tmp_path / "fit" / "posterior.png").exists()
@@ -110,3 +115,39 @@ def test_bad_data_and_fits_exit_2(tmp_path: Path, capsys, table: str, fits, mess
     assert main(args) == 2
     err = capsys.readouterr().err
     assert message in err, err
+
+
+def test_the_command_writes_the_plots_of_the_calibration(tmp_path: Path, monkeypatch) -> None:
+    """``perga calibrate`` hands the study's result to the report (the study writes best.toml
+    and fit.json only): fit.png draws the measured values and the model at the fit,
+    residuals.png the residuals, each exactly."""
+    key = "contacts.granule-hammer.restitution"
+    angles = [0.3, 0.7, 1.0]
+    data = Data(
+        tmp_path / "measured.csv",
+        [{"granules.placement.angle": a} for a in angles],
+        ["first_impact_restitution"],
+        np.array([[0.60], [0.62], [0.65]]),
+        np.full((3, 1), 0.01),
+    )
+    fit = Fit(
+        "least-squares", [key], [0.66], [0.01], [(0.64, 0.68)], [[1.0], [-2.0], [3.0]], 14.0,
+        None, 3, 9, [[[0.59, 0.63]], [[0.60, 0.64]], [[0.64, 0.68]]],
+    )  # fmt: skip
+    simulated = np.array([[0.61], [0.60], [0.68]])
+
+    def study(case: Path, data_path: Path, fits: list[str], directory: Path, **_) -> Calibration:
+        directory.mkdir(parents=True)
+        return Calibration(fit, data, simulated)
+
+    monkeypatch.setattr("perga.studies.calibrate.calibrate", study)
+    saved = saved_figures(monkeypatch)
+    out = tmp_path / "out"
+    args = ["calibrate", str(CASE), "--data", str(data.path), "--fit", f"{key}=0.3:0.95"]
+    assert main([*args, "-o", str(out)]) == 0
+    assert set(saved) == {"fit.png", "residuals.png"}
+    assert (out / "fit.png").is_file() and (out / "residuals.png").is_file()
+    panel = saved["fit.png"].axes[0]
+    assert list(panel.containers[0].lines[0].get_ydata()) == [0.60, 0.62, 0.65]
+    assert list(lines(panel)["model at the fit"][1]) == [0.61, 0.60, 0.68]
+    assert list(saved["residuals.png"].axes[0].get_lines()[0].get_ydata()) == [1.0, -2.0, 3.0]

@@ -4,7 +4,8 @@ and the 1 % agreement wherever simulation and analytical model describe the same
 The tolerance is the issue's 1 % (perga.studies.compare.AGREEMENT): the rigid engine reproduces
 the closed forms to 1e-4-5e-4 at the bundled steps (docs/validation.md), so a modelling or
 bookkeeping error shows; regimes that differ are reported, not asserted to agree. One report is
-generated per session (about 20 s on two cores).
+generated per session (under a minute on two cores); its runs are study jobs on the executor, found
+finished by key when run again.
 """
 
 from __future__ import annotations
@@ -15,8 +16,13 @@ from pathlib import Path
 import pytest
 
 from perga.cli import main
+from perga.studies import executor
 from perga.studies.compare import AGREEMENT
 from perga.studies.compare_report import FIGURES
+from perga.studies.jobs import ROW
+from perga.studies.paper_runs import paper_job, paper_jobs, run_paper_study
+
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 @pytest.fixture(scope="module")
@@ -82,3 +88,50 @@ def test_regimes_that_differ_are_reported_with_numbers(report) -> None:
     assert percent and all(abs(r["error"]) > 1 for r in percent)
     text = (Path(report[0]) / "report.md").read_text()
     assert "Regimes that cannot match" in text
+
+
+def test_the_paper_runs_are_study_jobs_found_by_key(report, monkeypatch) -> None:
+    """Each run is in the directory its key names (WORK/runs/KEY), with the executor's row; run
+    again, every run is found finished and none runs: the same runs under the same names, the
+    names the report's rows carry."""
+    out, data = report
+    runs = paper_jobs(CASES)
+    jobs = [paper_job(run, CASES, out / "runs") for run in runs]
+    for job in jobs:
+        assert Path(job.directory) == out / "runs" / "runs" / job.key
+        row = json.loads((Path(job.directory) / ROW).read_text())
+        assert (row["key"], row["status"]) == (job.key, "ok")
+
+    def run_nothing(*args, **kwargs) -> None:
+        raise AssertionError("a finished run was run again")
+
+    monkeypatch.setattr(executor, "execute", run_nothing)
+    again = run_paper_study(CASES, out / "runs")
+    assert [r.name for r in again] == [r.name for r in runs]
+    assert [r.directory for r in again] == [Path(j.directory) for j in jobs]
+    sweeps = {"blade-exit sweep", "two-body sweep"}
+    assert {r["run"] for r in data["rows"]} <= {r.name for r in runs} | sweeps
+
+
+def test_a_paper_run_without_its_row_alone_runs_again(report, monkeypatch) -> None:
+    """A run whose row.json is gone (cut short) runs again, alone, on a local cluster of one
+    worker, and gives the same impacts as before, to the last digit."""
+    out, _ = report
+    run = next(r for r in paper_jobs(CASES) if r.name == "two-body-M5g-m0.16g")
+    job = paper_job(run, CASES, out / "runs")
+    directory = Path(job.directory)
+    impacts = (directory / "impacts.csv").read_text()
+    (directory / ROW).unlink()
+    ran: list[str] = []
+    execute = executor.execute
+
+    def counted(client, jobs, on_row, *args) -> None:
+        ran.extend(j.key for j in jobs)
+        execute(client, jobs, on_row, *args)
+
+    monkeypatch.setattr(executor, "execute", counted)
+    runs = run_paper_study(CASES, out / "runs", workers=1)
+    assert ran == [job.key]
+    assert json.loads((directory / ROW).read_text())["status"] == "ok"
+    assert (directory / "impacts.csv").read_text() == impacts
+    assert len(runs) == len(paper_jobs(CASES))

@@ -45,8 +45,13 @@ def at_least_one(text: str) -> int:
 
 
 def study_options(parser: argparse.ArgumentParser) -> None:
-    """The options a study on Dask shares (:func:`cluster`, replicates' seeds, progress)."""
+    """The options a study with replicates shares: their seeds, and :func:`cluster_options`."""
     parser.add_argument("--seed", type=int, default=0, help="seed of the replicates' seeds")
+    cluster_options(parser)
+
+
+def cluster_options(parser: argparse.ArgumentParser) -> None:
+    """The options of runs on Dask (:func:`cluster`) and their progress."""
     parser.add_argument(
         "--workers", type=at_least_one, help="local worker processes, >= 1 (default: free cores)"
     )

@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from perga.cli.common import AddParser, default_case
+from perga.cli.common import AddParser, cluster, cluster_options, default_case
 from perga.progress import counted, progress_bar
 
 
@@ -65,9 +65,10 @@ def compare(args: argparse.Namespace) -> int:
     """Runs (and with --paper the bundled paper runs) against the analytical model."""
     from perga.case import load_case
     from perga.stats import load_run
-    from perga.studies.compare import analyse, run_paper_study
+    from perga.studies.compare import analyse
     from perga.studies.compare_report import write_report
     from perga.studies.paper_check import Params
+    from perga.studies.paper_runs import PaperRunsFailedError, run_paper_study
 
     if not args.runs and not args.paper:
         print("error: give run directories or --paper", file=sys.stderr)
@@ -83,10 +84,18 @@ def compare(args: argparse.Namespace) -> int:
     if args.paper:
         work = args.work or out / "runs"
         bar = progress_bar(0, "runs", "perga compare --paper", args.quiet)
+        unfinished: list[str] = []
         try:
-            runs += run_paper_study(fitted.parent, work, args.processes, counted(bar))
+            runs += run_paper_study(fitted.parent, work, progress=counted(bar), **cluster(args))
+        except PaperRunsFailedError as exc:
+            unfinished = exc.failed
         finally:
             bar.close()
+        for run in unfinished:
+            print(f"error: the paper run {run}", file=sys.stderr)
+        if unfinished:
+            print("--retry-failed runs them again", file=sys.stderr)
+            return 1
     analyses = analyse(runs, Params.from_case(load_case(fitted)))
     command = "perga compare " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["compare"] else ""
     data = write_report(analyses, out, Params.from_case(load_case(fitted)), command)
@@ -135,10 +144,11 @@ def add_parsers(add: AddParser) -> None:
     parser = add("compare", help="runs against the analytical model: Markdown + PNG + JSON report")
     parser.add_argument("runs", nargs="*", type=Path, metavar="RUN", help="run directories")
     parser.add_argument(
-        "--paper", action="store_true", help="run the bundled paper cases and sweeps first"
+        "--paper",
+        action="store_true",
+        help="run the bundled paper cases and sweeps first (on Dask, as a sweep's runs)",
     )
     parser.add_argument("-o", "--output", type=Path, help="report folder (default reports/...)")
     parser.add_argument("--work", type=Path, help="--paper runs folder (default OUT/runs)")
-    parser.add_argument("--processes", type=int, default=2, help="--paper runs in parallel")
-    parser.add_argument("--quiet", action="store_true", help="no progress")
+    cluster_options(parser)
     parser.set_defaults(handler=compare)

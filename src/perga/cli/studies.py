@@ -64,6 +64,7 @@ def window(args: argparse.Namespace) -> int:
     """The operating window's runs, maps and report."""
     from perga.studies.study_file import StudyError
     from perga.studies.window import in_window, run_window, window_study
+    from perga.studies.window_report import write_maps, write_report
 
     try:
         study = window_study(
@@ -81,6 +82,8 @@ def window(args: argparse.Namespace) -> int:
         args,
         lambda progress: run_window(study, args.output, progress=progress, **cluster(args)),
     )
+    write_maps(result, args.output)
+    write_report(result, args.output)
     best = result.best.point
     if best is None:
         verdict = "no point gave both a release and a damage fraction"
@@ -105,12 +108,13 @@ def calibrate(args: argparse.Namespace) -> int:
     """The fit, its intervals, best.toml and fit.json."""
     from perga.case import load_case
     from perga.studies.calibrate import calibrate as fit_keys
+    from perga.studies.calibrate_report import write_plots
     from perga.studies.study_file import StudyError
 
     load_case(args.case)  # the case itself first: its problems are a case file's
     start = time.perf_counter()
     try:
-        fit = fit_keys(
+        result = fit_keys(
             args.case,
             args.data,
             args.fit,
@@ -122,6 +126,8 @@ def calibrate(args: argparse.Namespace) -> int:
         )
     except StudyError as exc:
         return problems(exc.problems)
+    write_plots(result, args.output)
+    fit = result.fit
     for key, value, (lo, hi) in zip(fit.keys, fit.values, fit.intervals, strict=True):
         print(f"{key} = {value:.6g}  (95 %: {lo:.6g} to {hi:.6g})")
     print(

@@ -36,11 +36,13 @@ class Run:
     hammers: Columns = field(repr=False)
     impacts: Columns = field(repr=False)
     energy: Columns = field(repr=False)
+    label: str = ""
+    """The run's name in analyses and reports; empty: its directory's name."""
 
     @property
     def name(self) -> str:
-        """The run directory's name."""
-        return self.directory.name
+        """The run's label, or its directory's name."""
+        return self.label or self.directory.name
 
     @property
     def omega(self) -> float:
@@ -81,8 +83,9 @@ def _optional(directory: Path, name: str) -> Columns:
     return {} if path is None else read_columns(path)
 
 
-def load_run(directory: Path | str) -> Run:
-    """Load a run directory written by ``perga run`` (case.toml and summary.json required)."""
+def load_run(directory: Path | str, label: str = "") -> Run:
+    """Load a run directory written by ``perga run`` (case.toml and summary.json required);
+    ``label``: its name in analyses and reports (default: the directory's)."""
     directory = Path(directory)
     for needed in ("case.toml", "summary.json"):
         if not (directory / needed).exists():
@@ -97,6 +100,7 @@ def load_run(directory: Path | str) -> Run:
         hammers=_optional(directory, "hammers"),
         impacts=_optional(directory, "impacts"),
         energy=_optional(directory, "energy"),
+        label=label,
     )
 
 

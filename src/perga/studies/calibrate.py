@@ -368,6 +368,16 @@ def best_case(case: Path, fit: Fit) -> str:
     )
 
 
+@dataclass(frozen=True)
+class Calibration:
+    """A finished calibration: the fit, the data it was fitted to and the simulated metrics at
+    the fit (data rows × metrics), for the plots (:mod:`perga.studies.calibrate_report`)."""
+
+    fit: Fit
+    data: Data
+    simulated: np.ndarray
+
+
 def calibrate(
     case: Path,
     data_path: Path,
@@ -380,9 +390,9 @@ def calibrate(
     scheduler: str | None = None,
     workers: int | None = None,
     function: Callable[[Job], dict[str, Any]] = run_job,
-) -> Fit:
-    """Fit ``fits`` (``KEY=LO:HI``) of ``case`` to ``data_path``; writes best.toml, fit.json and
-    the plots into ``directory`` and returns the fit (module doc)."""
+) -> Calibration:
+    """Fit ``fits`` (``KEY=LO:HI``) of ``case`` to ``data_path``; writes best.toml and fit.json
+    into ``directory`` and returns the calibration (module doc)."""
     keys = [parse_fit(f) for f in fits]
     for k in keys:
         try:
@@ -409,7 +419,4 @@ def calibrate(
         "interval": "95 %: ±t(0.975, n − p)·se (least squares), posterior 2.5-97.5 % (bayes)",
     }
     (directory / "fit.json").write_text(json.dumps(record, indent=2, default=float) + "\n")
-    from perga.studies.calibrate_report import write_plots
-
-    write_plots(fit, data, simulated, directory)
-    return fit
+    return Calibration(fit, data, simulated)

@@ -11,7 +11,7 @@ import numpy as np
 from perga.output.figures import new_figure, save
 
 if TYPE_CHECKING:
-    from perga.studies.calibrate import Data, Fit
+    from perga.studies.calibrate import Calibration, Data, Fit
 
 
 def _abscissa(data: Data) -> tuple[str, np.ndarray]:
@@ -24,8 +24,9 @@ def _abscissa(data: Data) -> tuple[str, np.ndarray]:
     return "data row", np.arange(len(data.values), dtype=float)
 
 
-def write_plots(fit: Fit, data: Data, simulated: np.ndarray, directory: Path) -> list[Path]:
+def write_plots(calibration: Calibration, directory: Path) -> list[Path]:
     """fit.png (data and model per metric), residuals.png, posterior.png (Bayesian only)."""
+    fit, data, simulated = calibration.fit, calibration.data, calibration.simulated
     name, x = _abscissa(data)
     order = np.argsort(x)
     band = np.array(fit.band)

@@ -13,19 +13,15 @@ says by how much and why). Runs are recognised by their case:
   (``single-granule.toml``, ``four-impacts.toml``, ``successive-impacts.toml``).
 - anything else: impact statistics only (restitution, speeds).
 
-:func:`run_paper_study` runs the bundled paper cases and sweeps into a work directory;
+:mod:`perga.studies.paper_runs` runs the bundled paper cases and sweeps;
 :mod:`perga.studies.compare_report` writes the report.
 """
 
 from __future__ import annotations
 
-import json
 import math
-import re
-from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -33,10 +29,9 @@ import numpy as np
 from perga.analytic.impact import impact_efficiencies
 from perga.analytic.paper import PaperRadialMotion, paper_cumulative_loss, paper_roots
 from perga.analytic.sliding import BladeSlide, LinearSlide
-from perga.case import load_case
 from perga.stats.energy import all_impacts, hinged_prediction, successive_energies
 from perga.stats.sweeps import blade_exit, blade_tip, efficiency_point
-from perga.stats.tables import Run, load_run
+from perga.stats.tables import Run
 from perga.stats.trajectory import amplitude_left, blade_frame, fit_exponential, free_flight
 from perga.studies.paper_check import Params, successive_model, vmax_decaying
 
@@ -632,149 +627,3 @@ def analyse(runs: Iterable[Run], paper: Params | None = None) -> list[Analysis]:
     if "two-body" in by_kind:
         analyses.append(analyse_two_body(by_kind["two-body"], paper))
     return analyses
-
-
-# --- the paper study: bundled cases and sweeps --------------------------------------------------
-
-RECORD = 'record = ["granules", "hammers", "impacts", "energy"]'
-FITTED_GRANULE_MASS = 0.0037581580314
-"""kg: the fitted granule of cases/paper-fitted.toml (its efficiency claims as fractions)."""
-HAMMER_MASSES = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2)
-"""kg: Fig. 4a's range, 5-200 g."""
-BLADE_OMEGA_FACTORS = (0.5, 1.0, 2.0, 3.0)
-"""× the fitted ω: Fig. 3's ω axis (as perga paper-check's grid, 0.5-3 ω)."""
-BLADE_FRICTIONS = (0.1, 0.3, 0.5, 0.8)
-"""Fig. 3's f axis (as perga paper-check's grid, 0.1-0.8)."""
-
-
-def variant(text: str, replacements: dict[str, str]) -> str:
-    """A case file's text with whole lines replaced (each must occur at least once) and the
-    recorded tables set to the CSV tables only (no ParaView series)."""
-    for old, new in replacements.items():
-        text, count = re.subn(rf"^{re.escape(old)}$", new, text, flags=re.MULTILINE)
-        if not count:
-            raise ValueError(f"line {old!r} not in the case file")
-    if not re.search(r"^record\s*=", text, flags=re.MULTILINE):
-        if re.search(r"^\[output\]$", text, flags=re.MULTILINE):
-            text = re.sub(r"^\[output\]$", f"[output]\n{RECORD}", text, flags=re.MULTILINE)
-        else:
-            text += f"\n[output]\n{RECORD}\n"
-    return text
-
-
-@dataclass(frozen=True)
-class Job:
-    """One run of the paper study: a name and the case file's text."""
-
-    name: str
-    text: str
-
-
-def paper_jobs(cases: Path) -> list[Job]:
-    """The runs the paper report needs, from the bundled cases in ``cases``."""
-
-    def read(name: str) -> str:
-        return (cases / name).read_text(encoding="utf-8")
-
-    jobs = [
-        Job("paper-decaying-branch", variant(read("paper-decaying-branch.toml"), {})),
-        Job("single-granule", variant(read("single-granule.toml"), {})),
-        Job("four-impacts", variant(read("four-impacts.toml"), {})),
-    ]
-    two_body, hinged = read("two-body-impact.toml"), read("single-granule.toml")
-    for M in HAMMER_MASSES:
-        for m in (0.00016, FITTED_GRANULE_MASS):
-            lines = {"mass = 0.005": f"mass = {M!r}", "mass = 0.00016": f"mass = {m!r}"}
-            jobs.append(Job(f"two-body-M{M * 1e3:g}g-m{m * 1e3:.3g}g", variant(two_body, lines)))
-        lines = {"mass = 0.02826": f"mass = {M!r}", "duration = 0.2": "duration = 0.03"}
-        jobs.append(Job(f"hinged-M{M * 1e3:g}g", variant(hinged, lines)))
-    jobs += _blade_jobs(cases / "blade-exit.toml")
-    return jobs
-
-
-def _blade_jobs(path: Path) -> list[Job]:
-    """The Fig. 3 sweep: blade-exit.toml over ω and f, the start relative to the blade kept."""
-    text, case = path.read_text(encoding="utf-8"), load_case(path)
-    tip = case.hammers.shape.length - case.hammers.shape.hinge_offset
-    (placement_line,) = re.findall(r"^placement = .*$", text, flags=re.MULTILINE)
-    omega0 = case.rotor.angular_velocity
-    (p,), (v,) = case.granules.placement.positions, case.granules.placement.velocities
-    h = p[1]
-    u0 = v[0] + omega0 * h  # x' relative to the blade at the start
-    jobs = []
-    for k in BLADE_OMEGA_FACTORS:
-        w = k * omega0
-        velocity = (u0 - w * h, w * p[0])
-        for f in BLADE_FRICTIONS:
-            slide = BladeSlide(w, f, f, "corotating", "leading", offset=h, tip=tip)
-            t_exit = float(slide.integrate(p[0], u0, 10.0).t[-1])
-            placement = (
-                f'placement = {{ kind = "explicit", positions = [[{p[0]!r}, {p[1]!r}]], '
-                f"velocities = [[{velocity[0]!r}, {velocity[1]!r}]] }}"
-            )
-            lines = {
-                "omega = 30.189475908      # rad/s, fitted (cases/paper-fitted.toml)": (
-                    f"omega = {w!r}"
-                ),
-                "friction = 0.35": f"friction = {f!r}",
-                "duration = 0.3": f"duration = {1.1 * t_exit + 2e-3!r}",
-                placement_line: placement,
-            }
-            jobs.append(Job(f"blade-w{k:g}-f{f:g}", variant(text, lines)))
-    return jobs
-
-
-def _run_job(job: Job, work: Path) -> Path:
-    """Write the job's case and run it into work/runs/NAME (reused if completed already)."""
-    from perga.run import FINISHED, prepare_directory, run_case
-
-    case_path = work / "cases" / f"{job.name}.toml"
-    directory = work / "runs" / job.name
-    summary = directory / "summary.json"
-    if (
-        case_path.exists()
-        and case_path.read_text(encoding="utf-8") == job.text
-        and summary.exists()
-        and json.loads(summary.read_text(encoding="utf-8")).get("status") in FINISHED
-    ):
-        return directory
-    case_path.parent.mkdir(parents=True, exist_ok=True)
-    case_path.write_text(job.text, encoding="utf-8")
-    prepare_directory(directory, overwrite=True)
-    run_case(load_case(case_path), case_path, directory)
-    return directory
-
-
-def run_jobs(
-    jobs: Sequence[Job],
-    work: Path,
-    processes: int = 2,
-    progress: Callable[[int, int], None] | None = None,
-) -> list[Path]:
-    """Run the jobs into ``work`` in a pool of ``processes``; the run directories in order;
-    ``progress(done, total)`` after each."""
-    work.mkdir(parents=True, exist_ok=True)
-    done: list[Path] = []
-    if processes <= 1:
-        runs: Iterable[Path] = (_run_job(job, work) for job in jobs)
-        for path in runs:
-            done.append(path)
-            if progress:
-                progress(len(done), len(jobs))
-        return done
-    with ProcessPoolExecutor(max_workers=processes) as pool:
-        for path in pool.map(_run_job, jobs, [work] * len(jobs)):
-            done.append(path)
-            if progress:
-                progress(len(done), len(jobs))
-    return done
-
-
-def run_paper_study(
-    cases: Path,
-    work: Path,
-    processes: int = 2,
-    progress: Callable[[int, int], None] | None = None,
-) -> list[Run]:
-    """Run (or reuse) every run of the paper report and load them."""
-    return [load_run(d) for d in run_jobs(paper_jobs(cases), work, processes, progress)]

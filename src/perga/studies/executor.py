@@ -9,12 +9,13 @@ that cluster instead (one started with ``dask scheduler`` / ``dask worker``, or 
 ``dask.distributed.Client``, to that client's cluster. The run directories must be on a file
 system the workers and this process share.
 
-:func:`execute` submits every job, hands each finished row to a callback as it arrives and
-returns when all are done. A worker that dies mid-run is the scheduler's concern: its runs go
-to another worker; rows already received are kept. Ctrl-C cancels what has not finished and
-raises KeyboardInterrupt after the rows received so far were handed over (one that Python
-swallowed in a callback of ``distributed``'s is raised after the next row,
-:func:`perga.stopping.raise_swallowed`).
+:func:`run_missing` hands over the rows of the runs found finished (by key,
+:mod:`perga.studies.jobs`) and runs the others; :func:`execute` submits every job, hands each
+finished row to a callback as it arrives and returns when all are done. A worker that dies
+mid-run is the scheduler's concern: its runs go to another worker; rows already received are
+kept. Ctrl-C cancels what has not finished and raises KeyboardInterrupt after the rows received
+so far were handed over (one that Python swallowed in a callback of ``distributed``'s is raised
+after the next row, :func:`perga.stopping.raise_swallowed`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,10 @@ from distributed import Client, LocalCluster, as_completed
 
 from perga.cores import free_cores
 from perga.stopping import raise_swallowed
-from perga.studies.jobs import Job, failed_row, run_job
+from perga.studies.jobs import Job, failed_row, finished_row, run_job
+
+Progress = Callable[[int, int], None]
+"""progress(runs done, runs in all)."""
 
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 """Environment of local workers: one thread each, numba's and BLAS's included."""
@@ -83,3 +87,42 @@ def execute(
     except BaseException:
         client.cancel(futures)
         raise
+
+
+def run_missing(
+    jobs: Sequence[Job],
+    on_row: Callable[[dict[str, Any]], None],
+    *,
+    client: Client | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    progress: Progress | None = None,
+) -> int:
+    """Call ``on_row(row)`` for every job and return how many ran now: first the rows of the
+    runs found finished (a failed one runs again only with ``retry_failed``), then, as they
+    finish, those of the others, run on ``client``, the cluster at ``scheduler`` or a local
+    cluster of ``workers`` processes (:func:`dask_client`). ``progress(done, total)`` once
+    the finished runs are found and after each row that arrives."""
+    todo = []
+    for job in jobs:
+        row = finished_row(job)
+        if row is not None and (row["status"] == "ok" or not retry_failed):
+            on_row(row)
+        else:
+            todo.append(job)
+    done = len(jobs) - len(todo)
+    if progress:
+        progress(done, len(jobs))
+
+    def arrived(row: dict[str, Any]) -> None:
+        nonlocal done
+        done += 1
+        on_row(row)
+        if progress:
+            progress(done, len(jobs))
+
+    if todo:
+        with dask_client(client, scheduler, workers) as c:
+            execute(c, todo, arrived)
+    return len(todo)

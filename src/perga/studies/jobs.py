@@ -49,7 +49,8 @@ class Job:
     directory: str
     key: str
     extra: tuple[str, ...] = field(default=())
-    """Further ``KEY=VALUE`` overrides every run of the study shares (e.g. a fitted value)."""
+    """Further ``KEY=VALUE`` overrides, applied before the parameters' (values in TOML, e.g.
+    ``output.record=["granules"]``)."""
 
     @property
     def overrides(self) -> tuple[str, ...]:

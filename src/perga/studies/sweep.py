@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,14 +22,11 @@ import pyarrow.parquet as pq
 from distributed import Client
 
 from perga.studies.design import points
-from perga.studies.executor import dask_client, execute
-from perga.studies.jobs import Job, derived_seed, finished_row, make_job
+from perga.studies.executor import Progress, run_missing
+from perga.studies.jobs import Job, derived_seed, make_job
 from perga.studies.study_file import Study
 
 RESULTS = "results.parquet"
-
-Progress = Callable[[int, int], None]
-"""progress(runs done, runs in all)."""
 
 
 def jobs_of(study: Study, directory: Path) -> list[Job]:
@@ -93,14 +89,6 @@ def sweep(
     directory.mkdir(parents=True, exist_ok=True)
     jobs = jobs_of(study, directory)
     rows: dict[str, dict[str, Any]] = {}
-    todo = []
-    for job in jobs:
-        row = finished_row(job)
-        if row is not None and (row["status"] == "ok" or not retry_failed):
-            rows[job.key] = row
-        else:
-            todo.append(job)
-    reused = len(rows)
     path = directory / RESULTS
     order = [j.key for j in jobs]
 
@@ -112,20 +100,22 @@ def sweep(
     def on_row(row: dict[str, Any]) -> None:
         nonlocal last_write
         rows[row["key"]] = row
-        if progress:
-            progress(len(rows), len(jobs))
         if time.monotonic() - last_write > 2.0:
             write_table(table(), path)
             last_write = time.monotonic()
 
-    if progress:
-        progress(len(rows), len(jobs))
     try:
-        if todo:
-            with dask_client(client, scheduler, workers) as c:
-                execute(c, todo, on_row)
+        ran = run_missing(
+            jobs,
+            on_row,
+            client=client,
+            scheduler=scheduler,
+            workers=workers,
+            retry_failed=retry_failed,
+            progress=progress,
+        )
     finally:
         write_table(table(), path)
     done = table()
     failed = sum(r["status"] != "ok" for r in done)
-    return SweepResult(path, done, len(todo), reused, failed)
+    return SweepResult(path, done, ran, len(jobs) - ran, failed)

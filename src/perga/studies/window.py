@@ -25,8 +25,9 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from perga.studies.design import axis
+from perga.studies.executor import Progress
 from perga.studies.study_file import Study, StudyError, study_from_options
-from perga.studies.sweep import Progress, sweep
+from perga.studies.sweep import sweep
 
 METRICS = ("released_fraction", "damaged_fraction", "throughput", "energy_per_kg")
 """The window's metrics, in their order in the table."""
@@ -312,15 +313,14 @@ def write_window_table(columns: dict[str, list[Any]], directory: Path) -> tuple[
 
 @dataclass(frozen=True)
 class WindowResult:
-    """A finished window study: its points, best point, trends, the sweep's rows and the
-    files written."""
+    """A finished window study: its points, best point, trends and the sweep's rows and
+    counts, for the maps and report (:mod:`perga.studies.window_report`)."""
 
     window: WindowStudy
     points: list[Point]
     best: Best
     trends: list[Trend]
     rows: list[dict[str, Any]]
-    files: list[Path]
     ran: int
     reused: int
     failed: int
@@ -336,9 +336,7 @@ def run_window(
     progress: Progress | None = None,
 ) -> WindowResult:
     """Run the window's sweep into ``directory`` (runs in ``DIR/runs``, one row each in
-    ``DIR/results.parquet``), then write the window table, maps and report."""
-    from perga.studies.window_report import write_maps, write_report
-
+    ``DIR/results.parquet``), then write the window table (``DIR/window.parquet``, .csv)."""
     result = sweep(
         window.study,
         directory,
@@ -350,10 +348,7 @@ def run_window(
     points = aggregate(result.rows, window.axes, window.grid())
     best = best_point(points, window.release_target, window.damage_limit)
     found = trends(window, points)
-    files = list(write_window_table(table_columns(window, points), directory))
-    done = WindowResult(
-        window, points, best, found, result.rows, files, result.ran, result.reused, result.failed
+    write_window_table(table_columns(window, points), directory)
+    return WindowResult(
+        window, points, best, found, result.rows, result.ran, result.reused, result.failed
     )
-    files.append(write_maps(done, directory))
-    files.append(write_report(done, directory))
-    return done
