@@ -43,7 +43,7 @@ def _granule_energy(body: pymunk.Body) -> float:
 _Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, HammerState]
 
 
-class ImpactRecorder:
+class RigidImpactLog:
     """Records the first step of every granule-hammer contact as an :class:`Impact`.
 
     A granule touching two convex pieces of one hammer in the same step (a notch) makes two

@@ -33,7 +33,7 @@ from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.rigid import sliding_point
 from perga.contact.rigid.bodies import attach_bodies
 from perga.contact.rigid.dissipation import ArbiterMeter
-from perga.contact.rigid.impacts import ImpactRecorder
+from perga.contact.rigid.impacts import RigidImpactLog
 from perga.contact.rigid.outline import OutlineFilter
 from perga.contact.rigid.wall_bounce import wall_bounce
 from perga.machine import units as u
@@ -100,8 +100,8 @@ class RigidContacts:
             self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
         if rolls == {True, False}:  # two sliding points need nothing (sliding_point)
             self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
-        self.recorder = (
-            ImpactRecorder(self.bodies, rewritten=bool(outline) or sliding)
+        self.log = (
+            RigidImpactLog(self.bodies, rewritten=bool(outline) or sliding)
             if record_impacts
             else None
         )
@@ -135,7 +135,7 @@ class RigidContacts:
     @property
     def impacts(self) -> list[Impact]:
         """Impacts recorded so far (empty if recording is off)."""
-        return [] if self.recorder is None else self.recorder.impacts
+        return [] if self.log is None else self.log.impacts
 
     def running(self) -> AbstractContextManager[None]:
         """Nothing to hold over a run: Chipmunk steps on one thread."""
@@ -154,8 +154,8 @@ class RigidContacts:
     def before_machine_step(self, time: float, machine: MachineState) -> None:
         """Stamp the step's impacts with its end ``time`` (s); keep the bodies' velocities for
         the dissipation."""
-        if self.recorder is not None:
-            self.recorder.time = time
+        if self.log is not None:
+            self.log.time = time
         if self.arbiters is not None:
             self.arbiters.before_step()
 
