@@ -52,6 +52,10 @@ class ContactLaw(ABC):
     effective mass m/(1 + m r²/I) = 2m/7); for discs (I = m r²/2) the period-matching ratio
     would be 1/3; 2/7 is kept so that perga's runs are comparable with LAMMPS at the same
     inputs."""
+    fixed_duration: ClassVar[bool] = False
+    """Whether a contact's duration depends on k_n, e and m_eff alone, not on its radius or
+    speed: a duration and a mass then give k_n (:meth:`stiffness_for_duration`'s r and v
+    unused)."""
     from_materials: ClassVar[bool] = False
     """Whether k_n may come from the materials' E and ν (:meth:`stiffness_from_materials`)."""
     mindlin: ClassVar[bool] = False

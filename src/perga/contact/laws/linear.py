@@ -18,6 +18,7 @@ class Linear(ContactLaw):
     plan_unit = "N/m"
     max_tangential_ratio = 4.0 / 3.0
     ratio_limit = "2(1 − ν)/(2 − ν) on tangent stiffnesses, 2/3 to 4/3 for ν in (−1, 0.5]"
+    fixed_duration = True
 
     def damping(self, e: float, end: End) -> float:
         """ζ (:meth:`damping_ratio`)."""
