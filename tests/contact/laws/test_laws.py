@@ -89,6 +89,7 @@ def test_linear_stiffness_and_duration(e: float, end: str) -> None:
         == LinearSpringDashpot.from_stiffness(k, e, M, end).duration
     )
     assert law.duration(k, e, M, R, V, end) == pytest.approx(t_c, rel=1e-12)
+    assert law.fixed_duration  # the mass fixes it: any radius, any speed
     assert law.duration(k, e, M, 10 * R, 3 * V, end) == law.duration(k, e, M, R, V, end)
     assert law.sticking_stiffness(k, M, R, V) == k
 
@@ -104,6 +105,7 @@ def test_hertz_stiffness_and_duration(e: float, end: str) -> None:
     assert duration == contact.impact(V).duration
     k = law.stiffness_for_duration(t_c, e, M, R, V, end)
     assert law.duration(k, e, M, R, V, end) == pytest.approx(t_c, rel=1e-12)
+    assert not law.fixed_duration
     assert law.duration(k, e, M, R, 2 * V, end) < t_c  # shorter when faster: t_c at v is the least
 
 
