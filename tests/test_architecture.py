@@ -17,7 +17,7 @@ ALLOWED: dict[str, set[str]] = {
     "analytic": {"analytic"},
     "geometry": {"geometry"},
     "case": {"case", "analytic", "geometry", "contact.laws"},
-    "model": {"model", "case", "analytic", "geometry"},
+    "model": {"model", "case", "analytic", "geometry", "contact.laws"},
     "engine": {"engine", "model", "analytic", "geometry", "contact", "contact.protocol"},
     "contact": {"contact", "engine", "model", "analytic", "geometry", "cores"},
     "contact.laws": {"contact.laws", "analytic"},
