@@ -15,7 +15,7 @@ import pytest
 from perga.analytic.contact import damping_ratio, restitution
 from perga.case import CaseError, load_case
 from perga.case.reference import json_schema, markdown_reference
-from perga.case.timestep import contact_plan, step_plan
+from perga.case.timestep import contact_plan, contact_steps, step_plan, steps_for_damping
 from perga.contact.laws import LAWS
 from tests.test_soft_run import SOFT, soft_run
 from tests.test_soft_run import restitution as measured
@@ -58,8 +58,11 @@ def test_the_new_law_reaches_the_restitutions_it_says(tmp_path, toy) -> None:
     path.write_text(text.replace('kind = "linear"', 'kind = "toy"'))
     case = load_case(path)
     (hammer, *_) = contact_plan(case, step_plan(case).granule)
-    assert hammer.damping == damping_ratio(0.1, "overlap") < 1.0
+    zeta = damping_ratio(0.1, "overlap")
+    assert hammer.damping == zeta < 1.0
     assert math.isfinite(hammer.duration)
+    # its ζ = 0.59 takes 92 steps per contact, not 50 (steps_for_damping)
+    assert contact_steps(case, "granule-hammer") == steps_for_damping(zeta, 50.0) > 90.0
 
 
 def test_the_schema_lists_the_registered_laws(toy) -> None:
