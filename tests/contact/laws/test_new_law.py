@@ -17,13 +17,16 @@ from perga.case import CaseError, load_case
 from perga.case.reference import json_schema, markdown_reference
 from perga.case.timestep import contact_plan, contact_steps, step_plan, steps_for_damping
 from perga.contact.laws import LAWS
+from perga.model import SoftContactSpec
 from tests.test_soft_run import SOFT, soft_run
 from tests.test_soft_run import restitution as measured
+
+TOY = "tests.contact.laws.toy_law:OverlapDamped"
 
 
 @pytest.fixture
 def toy(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setitem(LAWS, "toy", "tests.contact.laws.toy_law:OverlapDamped")  # the one line
+    monkeypatch.setitem(LAWS, "toy", TOY)  # the one line
 
 
 def promised(e: float) -> float:
@@ -69,3 +72,10 @@ def test_the_schema_lists_the_registered_laws(toy) -> None:
     kind = json.loads(json_schema())["$defs"]["ContactModel"]["properties"]["kind"]
     assert kind["enum"] == ["rigid", "linear", "hertz", "toy"]
     assert "| `kind` | `one of 'rigid', 'linear', 'hertz', 'toy'` |" in markdown_reference()
+
+
+def test_the_system_takes_a_registered_law(monkeypatch) -> None:
+    with pytest.raises(ValueError, match=r"a contact law, one of linear, hertz \(got 'toy'\)"):
+        SoftContactSpec("toy")
+    monkeypatch.setitem(LAWS, "toy", TOY)
+    assert SoftContactSpec("toy").kind == "toy"
