@@ -121,7 +121,6 @@ _DEAD_SLID = (
     "the else branch is dead: sliding needs |F_t| > f|F_n| >= 0, so F_t != 0 and k_t > 0 (k_t"
     " = 0 makes c_t = 0 and F_t = 0)"
 )
-_FLAG = "a flag: every reader of P_HERTZ and P_CLAMP tests it against 0"
 
 
 def _cache_flags(
@@ -163,7 +162,7 @@ _CACHE_FLAGS_LAWS = _cache_flags(
     "laws",
     '@njit(cache=True, inline="always", fastmath=FASTMATH)',
     12,
-    (68, 79, 114, 134, 169, 176, 186, 196, 209, 242),
+    (44, 55, 90, 110, 145, 152, 162, 172, 185, 218),
 )
 _CACHE_FLAGS_ENERGY = _cache_flags("energy", "@numba.njit(cache=True)", 18, (196, 217, 240, 263), 2)
 EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
@@ -432,83 +431,68 @@ EQUIVALENT: dict[tuple[str, int, int, str], tuple[str, str]] = {
         _THIRD_DOUBLE,
         ((36, "NumberReplacer#170"),),
     ),
-    ("laws", 54, 11, "NumberReplacer#2"): (
-        "N_PARAMS = 8",
-        (
-            "an unused ninth column: rows, tables and the kernel's shape check are all sized "
-            "by N_PARAMS, columns read by their P_* index"
-        ),
-    ),
     **_CACHE_FLAGS_LAWS,
-    ("laws", 76, 42, "ReplaceComparisonOperator_Gt_GtE#0"): (
+    ("laws", 52, 42, "ReplaceComparisonOperator_Gt_GtE#0"): (
         "return delta + 0.5 * dt * abs(ddelta) > 0.0",
         (
             "differs only at δ = −½dt|δ̇| exactly, the edge of the kick interval, where the "
             "law's normal force is 0"
         ),
     ),
-    ("laws", 129, 10, "ReplaceComparisonOperator_Lt_LtE#0"): (
+    ("laws", 105, 10, "ReplaceComparisonOperator_Lt_LtE#0"): (
         "if fn < 0.0 and clamp != 0.0:",
         ("sets F_n = 0 where it is ±0 already: the cap f|F_n| and the force sums are the same"),
     ),
-    ("laws", 154, 57, "NumberReplacer#40"): (
+    ("laws", 130, 57, "NumberReplacer#32"): (
         "ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0",
         _ZETA_T_CHECKED,
     ),
-    ("laws", 154, 57, "NumberReplacer#41"): (
+    ("laws", 130, 57, "NumberReplacer#33"): (
         "ct = 2.0 * dampt * math.sqrt(kt * m_eff) if dampt != 0.0 else 0.0",
         _ZETA_T_CHECKED,
     ),
-    ("laws", 158, 15, "ReplaceComparisonOperator_Gt_GtE#1"): (
+    ("laws", 134, 15, "ReplaceComparisonOperator_Gt_GtE#1"): (
         "if abs(ft) > cap:",
         (
             "at |F_t| = cap both branches give the same force and stretch, and losses equal "
             "algebraically"
         ),
     ),
-    ("laws", 160, 42, "ReplaceComparisonOperator_Gt_GtE#2"): (
+    ("laws", 136, 42, "ReplaceComparisonOperator_Gt_GtE#2"): (
         "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
         _DEAD_SLID,
     ),
-    ("laws", 160, 44, "NumberReplacer#45"): (
+    ("laws", 136, 44, "NumberReplacer#37"): (
         "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
         _DEAD_SLID,
     ),
-    ("laws", 160, 53, "NumberReplacer#46"): (
+    ("laws", 136, 53, "NumberReplacer#38"): (
         "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
         _DEAD_SLID,
     ),
-    ("laws", 160, 53, "NumberReplacer#47"): (
+    ("laws", 136, 53, "NumberReplacer#39"): (
         "slid = -(ft + ct * vt) / kt if kt > 0.0 else 0.0",
         _DEAD_SLID,
     ),
-    ("laws", 253, 14, "NumberReplacer#67"): (
+    ("laws", 229, 14, "NumberReplacer#59"): (
         "if mur == 0.0 or w_rel == 0.0:",
         ("μ_r >= 0 is checked where rows are made; at μ_r = 0 the formula's torque is ±0 anyway"),
     ),
-    ("laws", 253, 18, "ReplaceOrWithAnd#0"): (
+    ("laws", 229, 18, "ReplaceOrWithAnd#0"): (
         "if mur == 0.0 or w_rel == 0.0:",
         (
             "min(μ_r R|F_n|, |w| I/dt) is 0 when μ_r = 0 or w = 0: the early return only "
             "saves work (a −0.0 torque adds nothing)"
         ),
     ),
-    ("laws", 262, 4, "ReplaceBinaryOperator_Mul_Div#47"): (
+    ("laws", 238, 4, "ReplaceBinaryOperator_Mul_Div#47"): (
         "*,",
         (
             "contact_parameters' keyword-only marker made positional-only: every call passes "
-            "model and e by position and the rest by keyword"
+            "the law and e by position and the rest by keyword"
         ),
     ),
-    ("laws", 305, 19, "NumberReplacer#88"): (
-        'row[P_HERTZ] = 1.0 if model == "hertz" else 0.0',
-        _FLAG,
-    ),
-    ("laws", 306, 19, "NumberReplacer#92"): (
-        'row[P_CLAMP] = 1.0 if end == "force" else 0.0',
-        _FLAG,
-    ),
-    ("timestep", 81, 42, "NumberReplacer#13"): (
+    ("timestep", 78, 42, "NumberReplacer#13"): (
         "m = float(masses(case, np.array([r]))[0]) if case.granules.size else case.granule_mass",
         "a one-element array: [-1] is [0]",
     ),

@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 
-from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio, tsuji_alpha
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.obstacles import initial_obstacles
 from perga.case.parts import (
@@ -31,9 +30,11 @@ from perga.case.schema import (
     Outlet,
     RandomPlacement,
     ShotPlacement,
+    one_of,
 )
 from perga.case.sizes import initial_radii, radius_range
 from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
+from perga.contact.laws import LAWS, contact_law
 from perga.geometry.clearance import Obstacles, overlapping_pairs
 from perga.geometry.wall import circumscribed, wall_pieces
 
@@ -289,7 +290,7 @@ def _contact_model(case: Case) -> list[str]:
     if not cm.soft:
         return [
             f"contacts[{i}].{key}: sets a soft contact's stiffness; rigid contacts have none "
-            "(contact_model.kind = 'linear' or 'hertz')"
+            f"(contact_model.kind = {one_of(LAWS)})"
             for i, contact in enumerate(case.contacts)
             for key in ("duration", "stiffness")
             if getattr(contact, key) is not None
@@ -305,33 +306,36 @@ def _contact_model(case: Case) -> list[str]:
             "granules.rolls: must be true with soft contacts (a soft granule is a disc with "
             "I = m r²/2; sliding points need contact_model.kind = 'rigid')"
         )
-    if cm.kind == "hertz":
-        problems += _hertz_moduli(case) + _mindlin_moduli(case)
+    law = cm.law
+    if law.from_materials:
+        problems += _hertz_moduli(case)
     else:
+        hertz = [name for name in LAWS if contact_law(name).from_materials]
         problems += [
-            f"materials.{name}.youngs_modulus: sets Hertz stiffness; a linear contact takes "
-            "contact_model.duration or stiffness (or use kind = 'hertz')"
+            f"materials.{name}.youngs_modulus: sets Hertz stiffness; a {cm.kind} contact takes "
+            f"contact_model.duration or stiffness (or use kind = {one_of(hertz)})"
             for name, m in case.materials.items()
             if m.youngs_modulus is not None
         ]
-    tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
+    problems += _mindlin_moduli(case)
+    low, high = law.reachable(cm.end)
     for i, contact in enumerate(case.contacts):
         try:
-            tune(contact.restitution, cm.end)
+            law.damping(contact.restitution, cm.end)
         except ValueError:
             problems.append(
                 f"contacts[{i}].restitution: {contact.restitution:g} is out of reach of a "
-                f"{cm.kind} contact that ends at zero {cm.end}: needs e in "
-                f"({FORCE_END_MIN_RESTITUTION if cm.end == 'force' else 0:.4g}, 1]"
+                f"{cm.kind} contact that ends at zero {cm.end}: needs e in ({low:.4g}, {high:g}]"
                 + ("; contact_model.end = 'overlap' reaches any e > 0" if cm.end == "force" else "")
             )
     return problems
 
 
 def _hertz_moduli(case: Case) -> list[str]:
-    """Hertz stiffness comes from contact_model.stiffness or duration, shared, or from every
-    contact material's Young's modulus and Poisson's ratio: one of them, whole (a pair with
-    its own stiffness or duration needs neither)."""
+    """The stiffness of a law that takes it from the materials (Hertz) comes from
+    contact_model.stiffness or duration, shared, or from every contact material's Young's
+    modulus and Poisson's ratio: one of them, whole (a pair with its own stiffness or duration
+    needs neither)."""
     used = sorted(
         {m for c in case.contacts for m in c.pair
          if m in case.materials and c.stiffness is None and c.duration is None}

@@ -11,8 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel
+from pydantic.fields import FieldInfo
 
-from perga.case.schema import Case
+from perga.case.schema import Case, ContactKind
 
 CASES = Path(__file__).resolve().parents[3] / "cases"
 EXAMPLE_CASES = (
@@ -78,6 +79,15 @@ def _type_name(annotation: Any) -> str:
     return str(annotation).replace("typing.", "")
 
 
+def _field_type(field: FieldInfo) -> str:
+    """A field's type in words (:func:`_type_name`); a kind read from a registry
+    (:class:`~perga.case.schema.ContactKind`) as the Literal of its current choices."""
+    for kind in field.metadata:
+        if isinstance(kind, ContactKind):
+            return _type_name(typing.Literal[kind.choices()])
+    return _type_name(field.annotation)
+
+
 def _snippet(text: str, key: str) -> str:
     """The lines of TOML ``text`` that set table ``key`` (NAME: any name): its own ``[key]``
     block, or the line that sets it inline under its parent's header; "" if none."""
@@ -139,7 +149,7 @@ def _table(model: type[BaseModel], prefix: str, seen: set[str]) -> list[str]:
             )
         )
         lines.append(
-            f"| `{name}` | `{_type_name(field.annotation)}` | {default} | "
+            f"| `{name}` | `{_field_type(field)}` | {default} | "
             f"{(field.description or '').replace('|', '/')} |"
         )
         for sub in _models(field.annotation):

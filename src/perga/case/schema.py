@@ -7,8 +7,9 @@ range; ``perga schema`` prints the JSON Schema built from these models.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Annotated, Literal, get_args, get_origin
+from typing import TYPE_CHECKING, Annotated, Any, Literal, get_args, get_origin
 
 from pydantic import (
     BaseModel,
@@ -17,9 +18,13 @@ from pydantic import (
     PrivateAttr,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
+from pydantic_core import PydanticCustomError, core_schema
 
 from perga.analytic.hammer import PlateHammer
+from perga.contact.laws import LAWS, contact_law
+
+if TYPE_CHECKING:
+    from perga.contact.laws.base import ContactLaw
 
 
 class Strict(BaseModel):
@@ -643,15 +648,35 @@ class Solver(Strict):
         return self
 
 
-MAX_TANGENTIAL_RATIO = {"linear": 4.0 / 3.0, "hertz": 2.0}
-"""Largest k_t/k_n of a soft contact: an elastic solid's, as Poisson's ratio ν → −1 (the
-materials' lower limit): 2(1 − ν)/(2 − ν) on tangent stiffnesses (linear), 3(1 − ν)/(2 − ν) on
-Hertz's secant k_n√(R*δ) (Mindlin 1949; ``perga.analytic.contact.mindlin_ratio``)."""
+def one_of(values: Iterable[str]) -> str:
+    """The values quoted and listed as pydantic lists a Literal's: "'a', 'b' or 'c'"."""
+    quoted = [f"'{v}'" for v in values]
+    return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} or {quoted[-1]}"
 
-RATIO_LIMIT = {
-    "linear": "2(1 − ν)/(2 − ν) on tangent stiffnesses, 2/3 to 4/3 for ν in (−1, 0.5]",
-    "hertz": "3(1 − ν)/(2 − ν) on the secant k_n√(R*δ), 1 to 2 for ν in (−1, 0.5]",
-}
+
+class ContactKind:
+    """The type of ``contact_model.kind``: 'rigid' or a contact law's name, read from the
+    registry (:data:`perga.contact.laws.LAWS`) whenever a case is validated or its schema
+    written, so that every registered law is a kind."""
+
+    @staticmethod
+    def choices() -> tuple[str, ...]:
+        """'rigid', then the registered laws."""
+        return ("rigid", *LAWS)
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> core_schema.CoreSchema:
+        return core_schema.no_info_plain_validator_function(self.validate)
+
+    def __get_pydantic_json_schema__(self, schema: Any, handler: Any) -> dict[str, Any]:
+        return {"enum": list(self.choices()), "type": "string"}
+
+    def validate(self, value: object) -> str:
+        """``value`` if it is a kind, else pydantic's error for a Literal of the kinds."""
+        if isinstance(value, str) and value in self.choices():
+            return value
+        raise PydanticCustomError(
+            "literal_error", "Input should be {expected}", {"expected": one_of(self.choices())}
+        )
 
 
 class ContactModel(Strict):
@@ -663,7 +688,7 @@ class ContactModel(Strict):
     tangential spring capped by the pair's friction.
     """
 
-    kind: Literal["rigid", "linear", "hertz"] = Field(
+    kind: Annotated[str, ContactKind()] = Field(
         "rigid", description="'rigid' (Pymunk impulses), 'linear' or 'hertz' (soft contacts)"
     )
     duration: float | None = Field(
@@ -727,32 +752,41 @@ class ContactModel(Strict):
             soft_only = sorted(self.model_fields_set - {"kind"})
             if soft_only:
                 raise ValueError(
-                    f"{', '.join(soft_only)}: for kind = 'linear' or 'hertz' (soft contacts); "
+                    f"{', '.join(soft_only)}: for kind = {one_of(LAWS)} (soft contacts); "
                     "rigid contacts take none"
                 )
-        elif self.kind == "linear" and (self.duration is None) == (self.stiffness is None):
-            raise ValueError("kind = 'linear' needs exactly one of duration (s) or stiffness (N/m)")
-        elif self.kind == "hertz" and self.duration is not None and self.stiffness is not None:
+            return self
+        law, kind = self.law, self.kind
+        if not law.from_materials and (self.duration is None) == (self.stiffness is None):
             raise ValueError(
-                "kind = 'hertz' takes one of stiffness ((4/3)E*, Pa), duration (s) or the "
-                "materials' youngs_modulus and poisson_ratio"
+                f"kind = '{kind}' needs exactly one of duration (s) or stiffness "
+                f"({law.stiffness_unit})"
+            )
+        if law.from_materials and self.duration is not None and self.stiffness is not None:
+            raise ValueError(
+                f"kind = '{kind}' takes one of stiffness ({law.stiffness_unit}), duration (s) or "
+                "the materials' youngs_modulus and poisson_ratio"
             )
         ratio = self.tangential_ratio
-        if ratio == "mindlin" and self.kind != "hertz":
-            raise ValueError("tangential_ratio: 'mindlin' is for kind = 'hertz'")
-        if isinstance(ratio, float):
-            top = MAX_TANGENTIAL_RATIO[self.kind]
-            if not 0.0 <= ratio <= top:
-                raise ValueError(
-                    f"tangential_ratio: {ratio} is outside [0, {top:.4g}] for kind = "
-                    f"'{self.kind}' (an elastic solid's k_t/k_n, {RATIO_LIMIT[self.kind]})"
-                )
+        if ratio == "mindlin" and not law.mindlin:
+            mindlin = [name for name in LAWS if contact_law(name).mindlin]
+            raise ValueError(f"tangential_ratio: 'mindlin' is for kind = {one_of(mindlin)}")
+        if isinstance(ratio, float) and not 0.0 <= ratio <= law.max_tangential_ratio:
+            raise ValueError(
+                f"tangential_ratio: {ratio} is outside [0, {law.max_tangential_ratio:.4g}] for "
+                f"kind = '{kind}' (an elastic solid's k_t/k_n, {law.ratio_limit})"
+            )
         return self
 
     @property
     def soft(self) -> bool:
         """Whether granule contacts are soft (perga's kernel) rather than Pymunk impulses."""
         return self.kind != "rigid"
+
+    @property
+    def law(self) -> ContactLaw:
+        """The soft contacts' law (:mod:`perga.contact.laws`; ValueError for 'rigid')."""
+        return contact_law(self.kind)
 
 
 class Output(Strict):

@@ -2,10 +2,11 @@
 
 Rigid contacts (Pymunk impulses) have no duration: the step is bounded by tunnelling (a granule
 must not cross half a hammer or the wall in one step) and by the rotor's turn per step. Soft
-contacts (``contact_model.kind`` 'linear' or 'hertz') also need the shortest contact resolved by
-``steps_per_contact`` steps (default 50, MercuryDPM convention); their granules take
-``granule_substeps`` steps per Pymunk step of the rotor and hammers. The normal stiffness of the
-soft contacts is resolved here too, since the contact durations follow from it.
+contacts (``contact_model.kind`` a contact law, :mod:`perga.contact.laws`) also need the
+shortest contact resolved by ``steps_per_contact`` steps (default 50, MercuryDPM convention);
+their granules take ``granule_substeps`` steps per Pymunk step of the rotor and hammers. The
+normal stiffness of the soft contacts is resolved here too, since the contact durations follow
+from it; the law turns stiffness, damping and durations into one another.
 """
 
 from __future__ import annotations
@@ -16,17 +17,11 @@ from typing import Literal
 
 import numpy as np
 
-from perga.analytic.contact import (
-    HertzTsuji,
-    LinearSpringDashpot,
-    damping_ratio,
-    mindlin_ratio,
-    tsuji_alpha,
-    tunnelling_time_step,
-)
+from perga.analytic.common import reduced_mass
+from perga.analytic.contact import mindlin_ratio, tunnelling_time_step
 from perga.case.hammer_geometry import hammer_geometry
 from perga.case.parts import chamber_geometry
-from perga.case.schema import Case, ExplicitPlacement, Material, ShotPlacement
+from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
 from perga.case.sizes import masses, radius_range
 
 MAX_ROTATION_PER_STEP = 0.05
@@ -62,7 +57,9 @@ def thinnest_obstacle(case: Case) -> float:
 def hammer_effective_mass(case: Case) -> float:
     """Smallest effective mass a hammer offers a granule's impact, kg: I_A/tip² for a hinged
     hammer struck at its tip, M/(1 + Mρ²/I_C) for a free one struck at its farthest point from
-    the centre of mass (ρ), and infinite for a welded one (the rotor's inertia)."""
+    the centre of mass (ρ), and infinite for a welded one (the rotor's inertia). The hinged one
+    is :func:`perga.analytic.impact.hinged_effective_mass`'s I_A/d² but for the square: tip**2
+    here, d·d there, which differ by an ulp for 1 in 1,200 numbers, and the steps with them."""
     h, g = case.hammers, hammer_geometry(case)
     if h.mount == "hinged":
         return g.moment_about_hinge / g.tip**2
@@ -80,7 +77,7 @@ def _pairs(case: Case) -> list[tuple[str, float, float]]:
     r = radius_range(case)[0]
     m = float(masses(case, np.array([r]))[0]) if case.granules.size else case.granule_mass
     hammer = hammer_effective_mass(case)
-    pairs = [("granule-hammer", m if math.isinf(hammer) else m * hammer / (m + hammer), r)]
+    pairs = [("granule-hammer", reduced_mass(m, hammer), r)]
     if case.chamber is not None:
         pairs.append(("granule-wall", m, r))
     if case.effects.granule_collisions is not None:
@@ -116,24 +113,39 @@ def normal_stiffness(case: Case) -> float:
 def stiffness_for_duration(case: Case, duration: float, e: float) -> float:
     """The k_n with which a granule (of ``granules.radius`` and its mass) striking a rigid wall
     head-on with restitution ``e`` stays ``duration`` (s) in contact: N/m (linear), or
-    (4/3)E*, Pa (Hertz, at the fastest relative speed)."""
-    cm, m = case.contact_model, case.granule_mass
-    if cm.kind == "linear":
-        return LinearSpringDashpot.from_duration(duration, e, m, cm.end).k
+    (4/3)E*, Pa (Hertz, at the fastest relative speed); the law's
+    :meth:`~perga.contact.laws.base.ContactLaw.stiffness_for_duration`."""
+    cm = case.contact_model
     v = max(fastest_relative_speed(case), 1e-3)
-    unit = HertzTsuji.from_restitution(1.0, e, m, cm.end).impact(v).duration  # at k = 1
-    return (unit / duration) ** 2.5 / math.sqrt(case.granules.radius)
-
-
-def effective_modulus(a: Material, b: Material) -> float:
-    """E* of two materials in contact, Pa: 1/E* = (1 − ν_a²)/E_a + (1 − ν_b²)/E_b (Johnson,
-    Contact Mechanics, 1985, §4.2)."""
-    if None in (a.youngs_modulus, a.poisson_ratio, b.youngs_modulus, b.poisson_ratio):
-        raise ValueError("effective_modulus needs both materials' youngs_modulus and poisson_ratio")
-    return 1.0 / (
-        (1.0 - a.poisson_ratio**2) / a.youngs_modulus
-        + (1.0 - b.poisson_ratio**2) / b.youngs_modulus
+    return cm.law.stiffness_for_duration(
+        duration, e, case.granule_mass, case.granules.radius, v, cm.end
     )
+
+
+def _from_materials(case: Case, a: str, b: str) -> bool:
+    """Whether the stiffness of the soft contacts between materials ``a`` and ``b`` comes from
+    their Young's moduli and Poisson's ratios: a law that takes it from them, and no stiffness
+    or duration given, shared or the pair's own."""
+    cm, pair = case.contact_model, case.contact(a, b)
+    return (
+        cm.law.from_materials
+        and cm.stiffness is None
+        and cm.duration is None
+        and pair.stiffness is None
+        and pair.duration is None
+    )
+
+
+def _moduli(case: Case, a: str, b: str) -> tuple[tuple[float, float], tuple[float, float]]:
+    """((E_a, E_b), (ν_a, ν_b)) of materials ``a`` and ``b``, Pa and -; ValueError if any is
+    not given."""
+    m_a, m_b = case.materials[a], case.materials[b]
+    E, nu = (m_a.youngs_modulus, m_b.youngs_modulus), (m_a.poisson_ratio, m_b.poisson_ratio)
+    if None in (*E, *nu):
+        raise ValueError(
+            f"the {a}-{b} contact needs both materials' youngs_modulus and poisson_ratio"
+        )
+    return E, nu  # type: ignore[return-value]
 
 
 def pair_stiffness(case: Case, a: str, b: str) -> float:
@@ -141,44 +153,30 @@ def pair_stiffness(case: Case, a: str, b: str) -> float:
     (Hertz): the pair's own (its [[contacts]] stiffness, or duration by
     :func:`stiffness_for_duration` with its restitution), else contact_model's
     (:func:`normal_stiffness`), else (Hertz) from the materials' Young's moduli and Poisson's
-    ratios (:func:`effective_modulus`); a Hertz contact's stiffness is this times √R*,
-    R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
-    cm, pair = case.contact_model, case.contact(a, b)
+    ratios (the law's ``stiffness_from_materials``, (4/3)E*); a Hertz contact's stiffness is
+    this times √R*, R* = r_a r_b/(r_a + r_b) (r at a wall or hammer)."""
+    pair = case.contact(a, b)
     if pair.stiffness is not None:
         return pair.stiffness
     if pair.duration is not None:
         return stiffness_for_duration(case, pair.duration, pair.restitution)
-    if cm.kind == "hertz" and cm.stiffness is None and cm.duration is None:
-        return 4.0 / 3.0 * effective_modulus(case.materials[a], case.materials[b])
+    if _from_materials(case, a, b):
+        return case.contact_model.law.stiffness_from_materials(*_moduli(case, a, b))
     return normal_stiffness(case)
-
-
-DEFAULT_TANGENTIAL_RATIO = 2.0 / 7.0
-"""k_t/k_n where neither the case nor the materials give one (LAMMPS's default)."""
 
 
 def tangential_ratio(case: Case, a: str, b: str) -> float:
     """k_t/k_n of the soft contacts between materials ``a`` and ``b``: contact_model's number;
-    'mindlin', or by default for a Hertz pair whose stiffness comes from its materials, Mindlin's
-    6G*/E* (:func:`~perga.analytic.contact.mindlin_ratio`); else 2/7."""
-    cm, pair = case.contact_model, case.contact(a, b)
+    'mindlin', or by default for a pair of a law Mindlin's applies to (Hertz) whose stiffness
+    comes from its materials, Mindlin's 6G*/E* (:func:`~perga.analytic.contact.mindlin_ratio`);
+    else the law's default (2/7, as LAMMPS)."""
+    cm = case.contact_model
     if isinstance(cm.tangential_ratio, float):
         return cm.tangential_ratio
-    from_materials = (
-        cm.kind == "hertz"
-        and cm.stiffness is None
-        and cm.duration is None
-        and pair.stiffness is None
-        and pair.duration is None
-    )
-    if cm.tangential_ratio == "mindlin" or from_materials:
-        m_a, m_b = case.materials[a], case.materials[b]
-        if None in (m_a.youngs_modulus, m_a.poisson_ratio, m_b.youngs_modulus, m_b.poisson_ratio):
-            raise ValueError(f"Mindlin's k_t/k_n of {a}-{b} needs both materials' moduli")
-        return mindlin_ratio(
-            (m_a.youngs_modulus, m_b.youngs_modulus), (m_a.poisson_ratio, m_b.poisson_ratio)
-        )
-    return DEFAULT_TANGENTIAL_RATIO
+    law = cm.law
+    if cm.tangential_ratio == "mindlin" or (law.mindlin and _from_materials(case, a, b)):
+        return mindlin_ratio(*_moduli(case, a, b))
+    return law.default_tangential_ratio
 
 
 TANGENTIAL_INERTIA = 3.0
@@ -193,15 +191,12 @@ def tangential_half_periods(case: Case) -> dict[str, float]:
     k_t = ratio·k_n (linear), or ratio·k_n√(R*δ_max) (Hertz, at the largest overlap of an
     elastic head-on impact at the fastest relative speed, ½m_eff v² = (2/5)k_n√R* δ_max^{5/2}:
     the stiffest it gets); inf for k_t = 0."""
-    hertz = case.contact_model.kind == "hertz"
+    law = case.contact_model.law
     v = max(fastest_relative_speed(case), 1e-3)
     out = {}
     for name, m_eff, r_eff in _pairs(case):
         a, b = pair_materials(case, name)
-        k_n = pair_stiffness(case, a, b)
-        if hertz:
-            k_n *= math.sqrt(r_eff)
-            k_n *= (1.25 * m_eff * v * v / k_n) ** 0.2  # √δ_max
+        k_n = law.sticking_stiffness(pair_stiffness(case, a, b), m_eff, r_eff, v)
         k_t = tangential_ratio(case, a, b) * k_n
         out[name] = math.pi / math.sqrt(k_t * TANGENTIAL_INERTIA / m_eff) if k_t else math.inf
     return out
@@ -215,17 +210,13 @@ def contact_durations(case: Case) -> dict[str, float]:
     reach (e ≤ e⁻² with end = 'force').
     """
     cm = case.contact_model
+    law = cm.law
     v = max(fastest_relative_speed(case), 1e-3)
     out = {}
     for name, m_eff, r_eff in _pairs(case):
         a, b = pair_materials(case, name)
         e = case.contact(a, b).restitution
-        k_n = pair_stiffness(case, a, b)
-        if cm.kind == "linear":
-            out[name] = LinearSpringDashpot.from_stiffness(k_n, e, m_eff, cm.end).duration
-        else:
-            contact = HertzTsuji.from_restitution(k_n * math.sqrt(r_eff), e, m_eff, cm.end)
-            out[name] = contact.impact(v).duration
+        out[name] = law.duration(pair_stiffness(case, a, b), e, m_eff, r_eff, v, cm.end)
     return out
 
 
@@ -249,7 +240,7 @@ def contact_steps(case: Case, name: str) -> float:
     """Steps per contact duration of the soft contact kind ``name`` (:func:`_pairs`)."""
     cm = case.contact_model
     e = case.contact(*pair_materials(case, name)).restitution
-    return steps_for_damping(damping_ratio(e, cm.end), cm.steps_per_contact)
+    return steps_for_damping(cm.law.damping_ratio(e, cm.end), cm.steps_per_contact)
 
 
 @dataclass(frozen=True)
@@ -288,18 +279,17 @@ CONVENTIONS = {
 def contact_plan(case: Case, granule_dt: float) -> list[PairPlan]:
     """The soft contacts of ``case`` as taken with granule step ``granule_dt`` (s)."""
     cm = case.contact_model
-    tune = damping_ratio if cm.kind == "linear" else tsuji_alpha
+    law = cm.law
     half_periods = tangential_half_periods(case)
     out = []
     for name, t_c in contact_durations(case).items():
         a, b = pair_materials(case, name)
         e = case.contact(a, b).restitution
-        unit = "N/m" if cm.kind == "linear" else "Pa, (4/3)E*: k_n·√R* per contact"
-        k, damping = pair_stiffness(case, a, b), tune(e, cm.end)
+        k, damping = pair_stiffness(case, a, b), law.damping(e, cm.end)
         convention, half = CONVENTIONS[cm.end], half_periods[name]
         out.append(
             PairPlan(
-                name, (a, b), e, k, unit, damping, convention, t_c, t_c / granule_dt,
+                name, (a, b), e, k, law.plan_unit, damping, convention, t_c, t_c / granule_dt,
                 tangential_ratio(case, a, b), half, half / granule_dt,
             )
         )  # fmt: skip

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal
 import numpy as np
 
 from perga.analytic.common import STANDARD_GRAVITY
+from perga.contact.laws import LAWS
 from perga.geometry.convex import decompose
 from perga.geometry.polygon import clean, counter_clockwise, self_intersection, vertex_tuples
 from perga.geometry.wall import circumscribed, wall_pieces
@@ -388,7 +389,8 @@ class RigidContactSpec:
 class SoftContactSpec:
     """Soft granule contacts (:mod:`perga.contact.soft`) instead of Pymunk impulses.
 
-    model: 'linear' or 'hertz' (each pair's k_n: :attr:`ContactSpec.stiffness`);
+    model: the contact law's name in :data:`perga.contact.laws.LAWS` ('linear', 'hertz', ...;
+    each pair's k_n: :attr:`ContactSpec.stiffness`);
     tangential_damping: ratio ζ_t of the tangential dashpot
     −2ζ_t√(k_t m_eff)·v_t, in [0, 1); rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
@@ -397,7 +399,7 @@ class SoftContactSpec:
     the pair's restitution, friction from the pair's friction.
     """
 
-    model: Literal["linear", "hertz"]
+    model: str
     tangential_damping: float = 0.0
     rolling: float = 0.0
     end: Literal["force", "overlap"] = "force"
@@ -406,8 +408,10 @@ class SoftContactSpec:
 
     def __post_init__(self) -> None:
         problems: list[str] = []
-        if self.model not in ("linear", "hertz"):
-            problems.append(f"model must be 'linear' or 'hertz' (got {self.model!r})")
+        if self.model not in LAWS:
+            problems.append(
+                f"model must be a contact law, one of {', '.join(LAWS)} (got {self.model!r})"
+            )
         if not (math.isfinite(self.rolling) and self.rolling >= 0):
             problems.append(f"rolling must be finite and >= 0 (got {self.rolling})")
         if not 0.0 <= self.tangential_damping < 1.0:
@@ -420,7 +424,8 @@ class SoftContactSpec:
 
     @property
     def kind(self) -> str:
-        """The contact model's name in :data:`perga.contact.MODELS`: the law."""
+        """The contact model as the case names it (``contact_model.kind``): the law's name,
+        which :func:`perga.contact.contact_model` takes to the soft model."""
         return self.model
 
 

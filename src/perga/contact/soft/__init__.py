@@ -15,7 +15,6 @@
 
 from perga.contact.soft.granules import DEFAULT_DT_FRACTION, SoftGranules, chamber, plane
 from perga.contact.soft.laws import (
-    DEFAULT_KT_RATIO,
     N_PARAMS,
     contact_duration,
     contact_law,
@@ -27,7 +26,6 @@ from perga.contact.soft.laws import (
 
 __all__ = [
     "DEFAULT_DT_FRACTION",
-    "DEFAULT_KT_RATIO",
     "N_PARAMS",
     "SoftGranules",
     "chamber",

@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 from perga.analytic.contact import HertzTsuji, LinearSpringDashpot
+from perga.contact.laws.row import LINEAR
 from perga.contact.soft import kernel
 from perga.contact.soft.laws import (
     N_PARAMS,
@@ -24,7 +25,6 @@ from perga.contact.soft.polygon_set import (
     FREE,
     HIST_ACTIVE,
     HIST_COLUMNS,
-    LINEAR,
     PINNED,
     ContactTable,
     PolygonSet,

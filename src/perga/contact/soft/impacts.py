@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numba
 import numpy as np
 
+from perga.contact.laws.row import LINEAR
 from perga.contact.soft import SoftGranules
 from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
 from perga.contact.soft.polygon_set import (
@@ -29,7 +30,6 @@ from perga.contact.soft.polygon_set import (
     HIST_DISSIPATED,
     HIST_NORMAL_IMPULSE,
     HIST_PEAK_FORCE,
-    LINEAR,
 )
 from perga.geometry.disc_polygon import FASTMATH, closest_feature
 from perga.model.records import HammerState, Impact

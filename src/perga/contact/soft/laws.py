@@ -15,54 +15,30 @@ disc, ``r_B·(n × −F)``), and, if μ_r > 0, ``rolling_torque`` (+M on A, −M
 tangential spring history is a scalar ξ along the current tangent: storing it as a scalar *is*
 the rotation of the spring onto the new tangent plane that 3-D codes do explicitly.
 
-Parameter table ``params[mat_A, mat_B, :]`` (symmetric, float64, C-contiguous), columns P_*:
-
-P_KN     normal stiffness k_n: N/m (linear) or (4/3)E*, Pa (Hertz: the contact's stiffness is
-         k_n·√R*, R* = r_A r_B/(r_A + r_B) of the contact's own radii, r_A at a wall)
-P_DAMP   dimensionless damping D: force D·√(k_n m_eff)·δ̇ (linear, D = 2ζ) or
-         D·√(k_n m_eff)·δ^{1/4}·δ̇ (Hertz-Tsuji, D = α); m_eff is the contact's own reduced mass
-         (m_A m_B/(m_A + m_B); a wall contact passes m_A, a hammer contact the hammer's
-         effective mass), so e comes out right at walls and hammers too
-P_KT     tangential stiffness: k_t in N/m (linear) or k_t = P_KT·√(R*δ) (Hertz; Mindlin-like)
-P_DAMPT  tangential damping ratio ζ_t: force −2ζ_t √(k_t m_eff) v_t (default 0)
-P_MU     Coulomb friction coefficient f: |F_t| ≤ f|F_n|; when exceeded, the spring is rescaled to
-         the cap (ξ = −(F_t + c_t v_t)/k_t), Cundall & Strack (1979)
-P_MUR    rolling-resistance coefficient μ_r (dimensionless): constant torque μ_r R_eff |F_n|
-         opposing the relative rolling ω_A − ω_B (R_eff = r_A r_B/(r_A + r_B); r_A at a wall),
-         limited so that it cannot reverse the rolling in one step (no chatter at rest)
-P_HERTZ  0: linear spring-dashpot; 1: Hertz with Tsuji damping
-P_CLAMP  1: force clamped at zero (F_n = max(0, …): contact ends when the force returns to 0,
-         ``end="force"``); 0: attractive force allowed until the overlap returns to 0
-         (``end="overlap"``). D must be calibrated for the same criterion.
+Parameter table ``params[mat_A, mat_B, :]`` (symmetric, float64, C-contiguous): one row per
+material pair, made by its contact law (:meth:`perga.contact.laws.base.ContactLaw.row`), its
+columns P_* and normal-force forms in :mod:`perga.contact.laws.row`.
 """
 
 import math
-from typing import Literal
 
 import numpy as np
 from numba import njit
 
-from perga.analytic.contact import (
-    HertzTsuji,
-    LinearSpringDashpot,
-    damping_ratio,
-    tsuji_alpha,
+from perga.analytic.contact import End, HertzTsuji, LinearSpringDashpot
+from perga.contact.laws import contact_law as named_law
+from perga.contact.laws.row import (
+    N_PARAMS,
+    P_CLAMP,
+    P_DAMP,
+    P_DAMPT,
+    P_HERTZ,
+    P_KN,
+    P_KT,
+    P_MU,
+    P_MUR,
 )
 from perga.geometry.disc_polygon import FASTMATH
-
-P_KN, P_DAMP, P_KT, P_DAMPT, P_MU, P_MUR, P_HERTZ, P_CLAMP = range(8)
-N_PARAMS = 8
-
-DEFAULT_KT_RATIO = 2.0 / 7.0
-"""Default k_t/k_n = 2/7: LAMMPS ``pair_style gran/hooke/history``'s k_t for k_t = NULL.
-
-For spheres it equals the tangential and normal contact periods (tangential effective mass
-m/(1 + m r²/I) = 2m/7). For discs (I = m r²/2) the period-matching ratio would be 1/3; 2/7 is
-kept so that perga's runs are comparable with LAMMPS at the same inputs.
-"""
-
-Model = Literal["linear", "hertz"]
-End = Literal["overlap", "force"]
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -257,7 +233,7 @@ def rolling_torque(params, a, b, fn, w_rel, r_eff, i_red, dt):
 
 
 def contact_parameters(
-    model: Model,
+    law: str,
     e: float,
     *,
     k_n: float | None = None,
@@ -265,29 +241,35 @@ def contact_parameters(
     m_ref: float | None = None,
     friction: float = 0.5,
     rolling: float = 0.0,
-    kt_ratio: float = DEFAULT_KT_RATIO,
+    kt_ratio: float | None = None,
     zeta_t: float = 0.0,
     end: End = "force",
 ) -> np.ndarray:
     """One row of the parameter table (N_PARAMS,) for a material pair, calibrated to restitution e.
 
-    model: "linear" (F = k_n δ + 2ζ√(k_n m_eff) δ̇, ζ = ``damping_ratio(e, end)``) or "hertz"
-    (F = k_n δ^{3/2} + α√(k_n m_eff) δ^{1/4} δ̇, α = ``tsuji_alpha(e, end)``, exact). Stiffness:
-    k_n directly, or for "linear" from a contact duration t_c (s) on reduced mass m_ref (kg)
-    (``LinearSpringDashpot.from_duration``). k_t = kt_ratio·k_n (Hertz: k_t = kt_ratio·k_n·√δ);
-    friction f, rolling μ_r, tangential damping ratio zeta_t. end="force" (default) clamps
-    F_n ≥ 0 and calibrates ζ for it (Schwager & Pöschel 2007; docs/validation.md);
-    end="overlap" lets the force be attractive until δ = 0.
+    law: a contact law's name (:data:`perga.contact.laws.LAWS`), e.g. "linear"
+    (F = k_n δ + 2ζ√(k_n m_eff) δ̇) or "hertz" (F = k_n δ^{3/2} + α√(k_n m_eff) δ^{1/4} δ̇), whose
+    row it is (:meth:`~perga.contact.laws.base.ContactLaw.row`). Stiffness: k_n directly, or
+    from a contact duration t_c (s) on reduced mass m_ref (kg) for a law whose duration the
+    mass fixes (``fixed_duration``; linear: ``LinearSpringDashpot.from_duration``).
+    k_t = kt_ratio·k_n (Hertz: k_t = kt_ratio·k_n·√δ; default the law's, 2/7); friction f,
+    rolling μ_r, tangential damping ratio zeta_t. end="force" (default) clamps F_n ≥ 0 and
+    calibrates the damping for it (Schwager & Pöschel 2007; docs/validation.md); end="overlap"
+    lets the force be attractive until δ = 0.
     """
-    if model not in ("linear", "hertz"):
-        raise ValueError(f"model must be 'linear' or 'hertz' (got {model!r})")
+    contact = named_law(law)
     if (k_n is None) == (t_c is None):
         raise ValueError("give exactly one of k_n and t_c")
     if t_c is not None:
-        if model != "linear" or m_ref is None:
-            raise ValueError("t_c needs model='linear' and m_ref (the reduced mass it refers to)")
-        k_n = LinearSpringDashpot.from_duration(t_c, e, m_ref, end).k
+        if not contact.fixed_duration or m_ref is None:
+            raise ValueError(
+                "t_c needs a law whose duration the mass fixes (linear) and m_ref (the reduced "
+                "mass it refers to)"
+            )
+        k_n = contact.stiffness_for_duration(t_c, e, m_ref, math.nan, math.nan, end)
     assert k_n is not None
+    if kt_ratio is None:
+        kt_ratio = contact.default_tangential_ratio
     if not (k_n > 0.0 and math.isfinite(k_n)):
         raise ValueError(f"k_n must be > 0 (got {k_n})")
     for name, value in (("friction", friction), ("rolling", rolling), ("kt_ratio", kt_ratio)):
@@ -295,16 +277,9 @@ def contact_parameters(
             raise ValueError(f"{name} must be >= 0 (got {value})")
     if not 0.0 <= zeta_t < 1.0:
         raise ValueError(f"zeta_t must be in [0, 1) (got {zeta_t})")
-    row = np.zeros(N_PARAMS)
-    row[P_KN] = k_n
-    row[P_DAMP] = tsuji_alpha(e, end) if model == "hertz" else 2.0 * damping_ratio(e, end)
-    row[P_KT] = kt_ratio * k_n
-    row[P_DAMPT] = zeta_t
-    row[P_MU] = friction
-    row[P_MUR] = rolling
-    row[P_HERTZ] = 1.0 if model == "hertz" else 0.0
-    row[P_CLAMP] = 1.0 if end == "force" else 0.0
-    return row
+    return contact.row(
+        e, k_n, friction=friction, rolling=rolling, kt_ratio=kt_ratio, zeta_t=zeta_t, end=end
+    )
 
 
 def pair_table(n_mat: int, rows: dict[tuple[int, int], np.ndarray]) -> np.ndarray:
@@ -335,7 +310,8 @@ def contact_duration(row: np.ndarray, m_eff: float, r_eff: float, v_max: float) 
     """Duration of a head-on contact of reduced mass m_eff (kg) and effective radius r_eff (m)
     under ``row``, s.
 
-    Linear: independent of speed and radius; Hertz (stiffness k_n√r_eff): at the approach speed
+    By the row's normal-force form, whatever law made it (:mod:`perga.contact.laws.row`):
+    linear, independent of speed and radius; Hertz (stiffness k_n√r_eff), at the approach speed
     v_max (m/s), the shortest over speeds up to v_max (t_c ∝ v^{-1/5}). Uses the closed forms
     of ``perga.analytic.contact``.
     """

@@ -60,6 +60,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
+from perga.contact.laws.row import LINEAR
 from perga.contact.soft.laws import contact_force, spring_energy, touching
 from perga.contact.soft.polygon_set import (
     FREE,
@@ -72,7 +73,6 @@ from perga.contact.soft.polygon_set import (
     HIST_SLIP,
     HIST_TANGENTIAL_IMPULSE,
     HIST_XI,
-    LINEAR,
     PINNED,
     ContactTable,
     PolygonSet,

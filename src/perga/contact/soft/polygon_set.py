@@ -40,7 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from perga.analytic.contact import damping_ratio, tsuji_alpha
+from perga.contact.laws import contact_law
 from perga.geometry.pieces import whole_features
 from perga.geometry.polygon import signed_area
 
@@ -51,19 +51,12 @@ PINNED = 1
 KINEMATIC = 2
 """Polygon kind: infinite inertia (walls, a rotor at imposed ω)."""
 
-LINEAR = 0
-"""Normal law: linear spring-dashpot F = k_n δ + c δ̇, clamped at zero."""
-HERTZ = 1
-"""Normal law: Hertz with Tsuji damping F = k δ^{3/2} + α√(m k) δ^{1/4} δ̇, clamped at zero."""
-
 HIST_XI, HIST_ACTIVE, HIST_RATE = 0, 1, 2
 HIST_NORMAL_IMPULSE, HIST_TANGENTIAL_IMPULSE, HIST_DISSIPATED = 3, 4, 5
 HIST_SLIP = 6
 HIST_PEAK_FORCE = 7
 HIST_COLUMNS = 8
 """Columns of the (granule, polygon) contact history (module doc)."""
-
-_LAWS = {"linear": LINEAR, "hertz": HERTZ}
 
 
 class PolygonArrays(NamedTuple):
@@ -287,10 +280,11 @@ def polygon_set(
 class ContactTable:
     """Granule-polygon contact parameters per (granule material, polygon material), SI.
 
-    Arrays (n_granule_mat, n_polygon_mat): law (int32, LINEAR or HERTZ); k_n (N/m for LINEAR;
-    (4/3)E* in Pa for HERTZ, the stiffness being k_n √r_i in N/m^{3/2}); k_t (N/m for LINEAR;
-    Pa for HERTZ, the stiffness being k_t √(r_i δ) in N/m); damping (ζ for LINEAR, Tsuji α for
-    HERTZ, both for the table's end criterion); friction f; clamp: 1.0 where the normal force is
+    Arrays (n_granule_mat, n_polygon_mat): law (int32, the normal-force form LINEAR or HERTZ of
+    :mod:`perga.contact.laws.row`); k_n (N/m for LINEAR; (4/3)E* in Pa for HERTZ, the stiffness
+    being k_n √r_i in N/m^{3/2}); k_t (N/m for LINEAR; Pa for HERTZ, the stiffness being
+    k_t √(r_i δ) in N/m); damping (the law's: ζ for LINEAR, Tsuji α for HERTZ, both for the
+    table's end criterion); friction f; clamp: 1.0 where the normal force is
     clamped at zero (end "force"), 0.0 where it may pull until the overlap closes ("overlap");
     damping_t: the tangential damping ratio ζ_t (dashpot −2ζ_t√(k_t m_eff)·v_t).
     """
@@ -323,16 +317,16 @@ def contact_table(
     """Contact table from k_n, k_t, restitution e and friction f (scalars or (n_gm, n_pm) arrays)
     and one tangential damping ratio ζ_t in [0, 1).
 
-    k_n, k_t: N/m (``law="linear"``) or Pa (``law="hertz"``: stiffnesses k_n √r_i and
-    k_t √(r_i δ), see ``ContactTable``). The damping is tuned for the end criterion ``end``:
-    ζ = damping_ratio(e, end) for ``law="linear"``, α = tsuji_alpha(e, end) for
-    ``law="hertz"``; e in (e^-2, 1] for "force" (the force clamped at zero), (0, 1] for
-    "overlap".
+    law: a contact law's name (:data:`perga.contact.laws.LAWS`), which gives the table its
+    normal-force form and its damping from e for the end criterion ``end``
+    (:meth:`~perga.contact.laws.base.ContactLaw.damping`: ζ = damping_ratio(e, end) for
+    "linear", α = tsuji_alpha(e, end) for "hertz"; e in (e^-2, 1] for "force", the force
+    clamped at zero, (0, 1] for "overlap"). k_n, k_t: N/m ("linear") or Pa ("hertz":
+    stiffnesses k_n √r_i and k_t √(r_i δ), see ``ContactTable``).
     """
     if end not in ("force", "overlap"):
         raise ValueError(f"end must be 'force' or 'overlap' (got {end!r})")
-    if law not in _LAWS:
-        raise ValueError(f"law must be 'linear' or 'hertz' (got {law!r})")
+    contact = contact_law(law)
     arrays = np.broadcast_arrays(
         *(np.atleast_2d(np.asarray(a, dtype=np.float64)) for a in (k_n, k_t, e, friction))
     )
@@ -341,10 +335,9 @@ def contact_table(
         raise ValueError("need k_n > 0, k_t >= 0, friction >= 0")
     if not 0.0 <= damping_t < 1.0:
         raise ValueError(f"damping_t must be in [0, 1) (got {damping_t})")
-    tune = damping_ratio if law == "linear" else tsuji_alpha
-    damping = np.vectorize(lambda x: tune(float(x), end), otypes=[np.float64])(ee)
+    damping = np.vectorize(lambda x: contact.damping(float(x), end), otypes=[np.float64])(ee)
     return ContactTable(
-        law=np.full(kn.shape, _LAWS[law], dtype=np.int32),
+        law=np.full(kn.shape, contact.form, dtype=np.int32),
         k_n=kn,
         k_t=kt,
         damping=np.ascontiguousarray(damping),
