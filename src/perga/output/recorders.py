@@ -18,6 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
+from perga.contact.laws import contact_law
 from perga.model.frame import Frame
 from perga.model.records import Departure, Events, Impact, Release
 from perga.model.spec import SceneSpec
@@ -214,7 +215,7 @@ class ImpactRecorder(EventRecorder):
         model = spec.contact_model.model
         if model == "impulse":
             omit |= {"peak_force", "peak_pressure"}
-        elif model != "hertz":
+        elif not contact_law(model).peak_pressure:
             omit.add("peak_pressure")
         return frozenset(omit)
 

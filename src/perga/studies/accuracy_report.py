@@ -4,16 +4,22 @@ one log-log work-precision plot per reference (matplotlib)."""
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, fields
 from pathlib import Path
 
+from perga.contact.laws import LAWS
 from perga.output.figures import new_figure, save
 from perga.studies.accuracy import LEVELS, REFERENCES, Row, StudyResult, recommend
 
 ERROR_FLOOR = 1e-16
 """Errors below this (exact to rounding: rigid restitution) are drawn at this value."""
+
+STYLES = ("o-", "s--", "^:", "d-.", "v-")
+"""Line styles of the families, rigid first, then each contact law in the registry's order
+(again from the first past the last)."""
 
 
 def write_csv(rows: Sequence[Row], path: Path) -> None:
@@ -111,7 +117,7 @@ def plot_reference(rows: Sequence[Row], reference: str, path: Path) -> None:
     """Log-log error against wall time per simulated second, one line per family."""
     fig, ax = new_figure((7.5, 5.0))
     chosen = [r for r in rows if r.reference == reference and r.status == "ok"]
-    styles = {"rigid": "o-", "linear": "s--", "hertz": "^:"}
+    styles = dict(zip(("rigid", *LAWS), itertools.cycle(STYLES)))
     for family in dict.fromkeys(r.family for r in chosen):
         line = sorted((r for r in chosen if r.family == family), key=lambda r: r.wall_per_sim)
         ax.plot(

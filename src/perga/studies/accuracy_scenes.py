@@ -35,15 +35,13 @@ from typing import Any, Literal
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from perga.analytic.contact import (
-    HERTZ_DURATION_COEFFICIENT,
-    HertzTsuji,
-    LinearSpringDashpot,
-)
+from perga.analytic.contact import HERTZ_DURATION_COEFFICIENT
 from perga.analytic.impact import hinged_impact
 from perga.analytic.sliding import frictionless_exit
 from perga.case import Case, CaseError
 from perga.case.checks import check_case
+from perga.case.timestep import pair_stiffness
+from perga.contact.laws import contact_law
 
 Model = Literal["rigid", "linear", "hertz"]
 
@@ -140,7 +138,7 @@ class Scene:
                 "granule_substeps": setting.granule_substeps,
             }
             t_c = setting.contact_duration
-            if setting.model == "linear":
+            if contact_law(setting.model).fixed_duration:
                 contact["duration"] = t_c
             else:
                 contact["stiffness"] = hertz_stiffness_for(t_c, self.hertz_speed)
@@ -322,27 +320,14 @@ ContactLaw = Callable[[float, float], float]
 
 
 def soft_contact_law(case: Case) -> ContactLaw:
-    """The granule-on-welded-face law the case defines, from :mod:`perga.analytic.contact`
-    (not from the kernel): linear F = k δ + c δ̇, Hertz F = k_n√r δ^{3/2} + η δ^{1/4} δ̇,
-    m_eff = m (a welded hammer is immovable), damping tuned to e under contact_model.end,
-    clamped at F ≥ 0 when the contact ends at zero force."""
-    cm, m = case.contact_model, case.granule_mass
+    """The granule-on-welded-face law the case defines, in closed form (not the kernel's,
+    :meth:`perga.contact.laws.base.ContactLaw.normal_force`): its own stiffness, m_eff = m (a
+    welded hammer is immovable), the granule's radius, damping tuned to e under
+    contact_model.end, clamped at F >= 0 when the contact ends at zero force."""
+    cm = case.contact_model
+    k_n = pair_stiffness(case, case.granules.material, case.hammers.material)
     e = case.granule_hammer_contact.restitution
-    if cm.kind == "linear":
-        lin = LinearSpringDashpot.from_duration(cm.duration, e, m, cm.end)
-        k, c = lin.k, lin.c
-
-        def linear(delta: float, rate: float) -> float:
-            return max(k * delta + c * rate, 0.0)
-
-        return linear if cm.end == "force" else lambda d, r: k * d + c * r
-    hz = HertzTsuji.from_restitution(cm.stiffness * math.sqrt(case.granules.radius), e, m, cm.end)
-    k_n, eta = hz.k_n, hz.eta
-
-    def hertz(delta: float, rate: float) -> float:
-        return max(k_n * delta**1.5 + eta * delta**0.25 * rate, 0.0)
-
-    return hertz if cm.end == "force" else lambda d, r: k_n * d**1.5 + eta * d**0.25 * r
+    return cm.law.normal_force(k_n, e, case.granule_mass, case.granules.radius, cm.end)
 
 
 @dataclass(frozen=True)

@@ -165,3 +165,20 @@ def test_the_laws_load_without_the_kernel() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout
     assert out.split("\n")[:2] == ["[]", "['numba']"]  # numba: perga.geometry's compiled parts
+
+
+@pytest.mark.parametrize(("e", "end"), [(0.6, "force"), (0.3, "overlap")])
+def test_the_normal_force_in_closed_form(e: float, end: str) -> None:
+    """F(δ, δ̇) of each law from the closed forms' own coefficients (the same floats: exact),
+    clamped at zero when the contact ends at zero force (a pulling rate shows it)."""
+    k_n, m, r = 2e5, 1e-4, 2e-3
+    linear = LinearSpringDashpot.from_stiffness(k_n, e, m, end)
+    hertz = HertzTsuji.from_restitution(k_n * math.sqrt(r), e, m, end)
+    for delta, rate in ((1e-5, 0.5), (2e-5, -0.3), (1e-6, -50.0)):
+        expected = (
+            linear.k * delta + linear.c * rate,
+            hertz.k_n * delta**1.5 + hertz.eta * delta**0.25 * rate,
+        )
+        for law, value in zip((Linear(), Hertz()), expected, strict=True):
+            force = law.normal_force(k_n, e, m, r, end)(delta, rate)
+            assert force == (max(value, 0.0) if end == "force" else value)

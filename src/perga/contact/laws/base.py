@@ -10,6 +10,7 @@ as one of its normal-force forms (:mod:`perga.contact.laws.row`).
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
@@ -60,6 +61,8 @@ class ContactLaw(ABC):
     """Whether k_n may come from the materials' E and ν (:meth:`stiffness_from_materials`)."""
     mindlin: ClassVar[bool] = False
     """Whether Mindlin's k_t/k_n (:func:`perga.analytic.contact.mindlin_ratio`) applies."""
+    peak_pressure: ClassVar[bool] = False
+    """Whether its impacts report the peak contact pressure of the peak force (Hertz's)."""
 
     def damping_ratio(self, e: float, end: End) -> float:
         """ζ giving restitution e: of the law's linear oscillator (Hertz-Tsuji: α/√5, Antypov &
@@ -99,6 +102,15 @@ class ContactLaw(ABC):
         self, k_n: float, e: float, m_eff: float, r_eff: float, v: float, end: End
     ) -> float:
         """Duration of a head-on contact of stiffness k_n and restitution e at speed v, s."""
+
+    @abstractmethod
+    def normal_force(
+        self, k_n: float, e: float, m_eff: float, r_eff: float, end: End
+    ) -> Callable[[float, float], float]:
+        """F(δ, δ̇): the normal force of a contact of stiffness k_n, restitution e, reduced mass
+        m_eff and effective radius r_eff at overlap δ (m) and approach rate δ̇ (m/s), N,
+        clamped at 0 when the contact ends at zero force: the law in closed form, apart from
+        the kernel's discretisation of it (an independent reference)."""
 
     @abstractmethod
     def sticking_stiffness(self, k_n: float, m_eff: float, r_eff: float, v: float) -> float:

@@ -7,6 +7,7 @@ al., Powder Technol. 71 (1992) 239), k_n = (4/3)E* in Pa (R* the contact's effec
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from perga.analytic.contact import End, HertzTsuji, effective_modulus, tsuji_alpha
 from perga.contact.laws.base import ContactLaw
@@ -24,6 +25,7 @@ class Hertz(ContactLaw):
     ratio_limit = "3(1 − ν)/(2 − ν) on the secant k_n√(R*δ), 1 to 2 for ν in (−1, 0.5]"
     from_materials = True
     mindlin = True
+    peak_pressure = True
 
     def damping(self, e: float, end: End) -> float:
         """α = √5 ζ (``tsuji_alpha``)."""
@@ -52,6 +54,16 @@ class Hertz(ContactLaw):
         return (
             HertzTsuji(k_n * math.sqrt(r_eff), self.damping(e, end), m_eff, end).impact(v).duration
         )
+
+    def normal_force(
+        self, k_n: float, e: float, m_eff: float, r_eff: float, end: End
+    ) -> Callable[[float, float], float]:
+        """k δ^{3/2} + η δ^{1/4} δ̇, k = k_n√r_eff, η = α√(m_eff k) (``HertzTsuji``)."""
+        law = HertzTsuji(k_n * math.sqrt(r_eff), self.damping(e, end), m_eff, end)
+        k, eta = law.k_n, law.eta
+        if end == "force":
+            return lambda delta, rate: max(k * delta**1.5 + eta * delta**0.25 * rate, 0.0)
+        return lambda delta, rate: k * delta**1.5 + eta * delta**0.25 * rate
 
     def sticking_stiffness(self, k_n: float, m_eff: float, r_eff: float, v: float) -> float:
         """The secant k_n√(R*δ_max) at the largest overlap of an elastic head-on impact at v,

@@ -5,6 +5,8 @@ N/m, ζ from e in closed form (``end="overlap"``, Luding 2008 Granular Matter) o
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from perga.analytic.contact import End, LinearSpringDashpot
 from perga.contact.laws.base import ContactLaw
 from perga.contact.laws.row import LINEAR
@@ -40,6 +42,16 @@ class Linear(ContactLaw):
     ) -> float:
         """θ_end/ω_d (``LinearSpringDashpot.duration``), whatever r_eff and v."""
         return LinearSpringDashpot(k_n, self.damping_ratio(e, end), m_eff, end).duration
+
+    def normal_force(
+        self, k_n: float, e: float, m_eff: float, r_eff: float, end: End
+    ) -> Callable[[float, float], float]:
+        """k_n δ + c δ̇, c = 2ζ√(k_n m_eff) (``LinearSpringDashpot``), whatever r_eff."""
+        law = LinearSpringDashpot(k_n, self.damping_ratio(e, end), m_eff, end)
+        k, c = law.k, law.c
+        if end == "force":
+            return lambda delta, rate: max(k * delta + c * rate, 0.0)
+        return lambda delta, rate: k * delta + c * rate
 
     def sticking_stiffness(self, k_n: float, m_eff: float, r_eff: float, v: float) -> float:
         """k_n itself."""
