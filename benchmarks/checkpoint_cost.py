@@ -27,7 +27,7 @@ from pathlib import Path
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 from perga.run import checkpoints
 
 CASES = ("separator", "soft-separator", "plate-hammers-soft", "bee-bread-separator")
@@ -88,7 +88,7 @@ def main() -> None:
         run = Path(scratch)
         for name in args.cases:
             case = load_case(Path("cases") / f"{name}.toml")
-            sim = Simulation(scene_spec(case))
+            sim = Simulation(compile_case(case))
             with sim.contacts.running():
                 for _ in range(args.steps):
                     sim.step()

@@ -13,7 +13,7 @@ hammers  a round chamber (R = 0.19 m) with 6 plate hammers 80 x 6 mm welded to a
          100 rad/s (hinges at 0.10 m) ploughing through granules of r = 1 mm (the lattice
          annulus of ``engine_vs_pymunk.py``), no gravity; a warm-up window, then a timed one.
          perga soft runs it from the case file ``cases/mill-soft.toml`` (``[contact_model]``)
-         through ``perga.case.load_case``, ``scene_spec`` and ``Simulation``.
+         through ``perga.case.load_case``, ``compile_case`` and ``Simulation``.
 
 Engines:
 
@@ -78,8 +78,8 @@ from perga.case import load_case
 from perga.contact.soft import SoftGranules, plane, uniform_table
 from perga.contact.soft.neighbours import build as build_neighbours
 from perga.engine import Simulation
-from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
-from perga.model.from_case import scene_spec
+from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, System
+from perga.model.compile import compile_case
 
 RIGID_DT = 1e-4  # s, perga rigid in the beds (design §8's Pymunk figure used the same)
 SHEAR_SPEED = 2.0  # m/s, speed of the sheared bed's top at t = 0
@@ -208,7 +208,7 @@ def lammps_contact(mass: float) -> dict[str, object]:
 # --- perga rigid ---------------------------------------------------------------------------------
 
 
-def rigid_engine(spec: SceneSpec, warm: int, steps: int) -> Engine:
+def rigid_engine(spec: System, warm: int, steps: int) -> Engine:
     def run() -> Result:
         sim = Simulation(spec, record_impacts=False, track_energy=False)
         for _ in range(warm):
@@ -227,7 +227,7 @@ def rigid_engine(spec: SceneSpec, warm: int, steps: int) -> Engine:
     return Engine("perga rigid (Pymunk)", len(spec.granules), spec.granule_dt, run)
 
 
-def rigid_box_spec(bed: beds.Bed, v: np.ndarray | None = None) -> SceneSpec:
+def rigid_box_spec(bed: beds.Bed, v: np.ndarray | None = None) -> System:
     """The bed in perga rigid: box walls welded to a resting rotor, gravity, RIGID_DT."""
     height = 1.5 * bed.top
     t = WALL_THICKNESS
@@ -236,8 +236,8 @@ def rigid_box_spec(bed: beds.Bed, v: np.ndarray | None = None) -> SceneSpec:
         wall_polygon(-t, 0.0, 0.0, height),
         wall_polygon(bed.width, 0.0, bed.width + t, height),
     )
-    return SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.01),
+    return System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.01),
         hammers=walls,
         granules=granule_specs(bed.x, beds.RADIUS, beds.MASS, v),
         contacts=rigid_contacts("wall"),
@@ -372,9 +372,9 @@ def hammer_lammps_data(path: Path, x: np.ndarray) -> int:
     return k
 
 
-def mill_case(x: np.ndarray, workdir: Path, substeps: int | None = None) -> SceneSpec:
+def mill_case(x: np.ndarray, workdir: Path, substeps: int | None = None) -> System:
     """The scene of benchmarks/cases/mill-soft.toml with the granules at x (and granule_substeps
-    if given), through perga's case loader (schema and cross-checks) and ``scene_spec``."""
+    if given), through perga's case loader (schema and cross-checks) and ``compile_case``."""
     text = MILL_CASE.read_text()
     positions = ", ".join(f"[{a:.17g}, {b:.17g}]" for a, b in x)
     changes = [
@@ -388,14 +388,14 @@ def mill_case(x: np.ndarray, workdir: Path, substeps: int | None = None) -> Scen
         text = text.replace(old, new)
     path = workdir / MILL_CASE.name
     path.write_text(text)
-    spec = scene_spec(load_case(path))
+    spec = compile_case(load_case(path))
     assert spec.contact_model.kind != "rigid" and math.isclose(
         spec.granule_dt, MILL_DT, rel_tol=1e-12
     )
     return spec
 
 
-def soft_mill_engine(spec: SceneSpec, threads: int, warm: int, steps: int) -> Engine:
+def soft_mill_engine(spec: System, threads: int, warm: int, steps: int) -> Engine:
     """perga soft in the hammer scene: ``Simulation`` (Pymunk rotor and hammers, soft
     granules), impact recorder and energy meter off, the pair forces in ``threads`` chunks
     (``solver.threads``), computed by as many threads as the run's rule allows (never more than
@@ -469,8 +469,8 @@ def hammers_case(n: int, args, lmp: str | None, workdir: Path, log) -> Case:
             )
             for a in mill.hammer_angles()
         )
-        spec = SceneSpec(
-            rotor=RotorSpec(omega=mill.OMEGA, radius=mill.ROTOR_RADIUS),
+        spec = System(
+            rotor=RotorSpec(angular_velocity=mill.OMEGA, radius=mill.ROTOR_RADIUS),
             hammers=hammers,
             granules=granule_specs(x, MILL_RADIUS, MILL_MASS),
             contacts=rigid_contacts("steel", "wall"),
@@ -566,8 +566,8 @@ def soft_impact(mode: str, v0: float, dt: float) -> float:
 
 def rigid_impact(v0: float) -> float:
     r, m = beds.RADIUS, beds.MASS
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.01),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.01),
         hammers=(wall_polygon(-0.02, -0.02, 0.02, 0.0),),
         granules=granule_specs(np.array([[0.0, r + 1e-3]]), r, m, np.array([[0.0, -v0]])),
         contacts=(ContactSpec("bb", "wall", beds.E, 0.0),),

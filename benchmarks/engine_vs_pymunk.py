@@ -10,7 +10,7 @@ round chamber wall 1 cm beyond the hammer tips keeps the bed in play (``--no-cha
 it the granules leave within ~25 ms and the step cost falls with them); no gravity (horizontal
 rotor). Variants:
 
-perga           ``Simulation(SceneSpec(...), record_impacts=False,
+perga           ``Simulation(System(...), record_impacts=False,
                 track_energy=False).step()``: the engine's core
 perga+impacts   the same with the impact recorder (begin/post_solve/separate callbacks)
 perga default   ``Simulation(spec)`` with its defaults (impact recorder and energy meter)
@@ -56,7 +56,7 @@ import numpy as np
 import pymunk
 
 from perga.engine import Simulation
-from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from perga.model import ChamberSpec, ContactSpec, GranuleSpec, HammerSpec, RotorSpec, System
 
 # --- the scene, SI -------------------------------------------------------------------------------
 
@@ -138,7 +138,7 @@ class Variant:
 # --- perga ---------------------------------------------------------------------------------------
 
 
-def perga_spec(n: int, chamber: bool) -> SceneSpec:
+def perga_spec(n: int, chamber: bool) -> System:
     hammers = tuple(
         HammerSpec(
             outline=hammer_outline(),
@@ -163,8 +163,8 @@ def perga_spec(n: int, chamber: bool) -> SceneSpec:
     if chamber:
         contacts.append(ContactSpec("bb", "wall", E_GH, F_GH))
         extra["chamber"] = ChamberSpec(CHAMBER_RADIUS, WALL_THICKNESS, "wall", WALL_SEGMENTS)
-    return SceneSpec(
-        rotor=RotorSpec(omega=OMEGA, radius=ROTOR_RADIUS),
+    return System(
+        rotor=RotorSpec(angular_velocity=OMEGA, radius=ROTOR_RADIUS),
         hammers=hammers,
         granules=granules,
         contacts=tuple(contacts),

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 from perga.output.recorders import make_recorders
 from perga.output.scene_file import write_scene
 
@@ -32,7 +32,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=10, help="machine steps between frames")
     args = parser.parse_args()
     case = load_case(args.case, overrides=["solver.threads=1"])
-    spec = scene_spec(case)
+    spec = compile_case(case)
     sim = Simulation(spec, record_impacts=True, track_energy=True)
     sim.run(args.start)
     times: dict[str, list[float]] = {}

@@ -26,7 +26,7 @@ from tests.case.test_fuzz import ROOT, SECONDS, broken_geometry, mutants
 
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 
 def outcome(path: Path, counts: Counter, slowest: list[float]) -> None:
@@ -37,7 +37,7 @@ def outcome(path: Path, counts: Counter, slowest: list[float]) -> None:
         if case.chamber is None:
             counts["loaded as a parameter set"] += 1
         else:
-            Simulation(scene_spec(case))
+            Simulation(compile_case(case))
             counts["loaded and built"] += 1
     except CaseError as exc:
         named = all(p.startswith(f"{path}: ") for p in exc.problems) and exc.problems

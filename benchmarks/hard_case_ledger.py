@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASE = "cases/separator.toml"
 
@@ -18,7 +18,7 @@ CASE = "cases/separator.toml"
 def ledger(rpm: float, dt: float, error_bias: float | None = None) -> str:
     """The ledger after 0.1 s at ``rpm`` and ``dt`` (s), with every joint's error bias set."""
     overrides = [f"rotor.rpm={rpm}", f"solver.dt={dt}", "solver.threads=1"]
-    sim = Simulation(scene_spec(load_case(CASE, overrides=overrides)))
+    sim = Simulation(compile_case(load_case(CASE, overrides=overrides)))
     if error_bias is not None:
         for constraint in sim.machine.space.constraints:
             constraint.error_bias = error_bias

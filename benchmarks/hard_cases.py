@@ -17,7 +17,7 @@ import time
 
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASES = {"rigid": "cases/separator.toml", "soft": "cases/soft-separator.toml"}
 HARD = {
@@ -43,7 +43,7 @@ def one(case: str, overrides: list[str], duration: float) -> str:
         loaded = load_case(case, overrides=[*overrides, "solver.threads=1"])
     except CaseError as exc:
         return f"refused: {exc.problems[0].split(': ', 1)[1][:110]}"
-    sim = Simulation(scene_spec(loaded))
+    sim = Simulation(compile_case(loaded))
     start = time.perf_counter()
     try:
         sim.run(duration)

@@ -21,7 +21,7 @@ from perga.case import load_case
 from perga.engine.simulation import Simulation
 from perga.machine import units as u
 from perga.machine.chipmunk_state import JointImpulses
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 
 def mean_anchor_velocity(body: pymunk.Body, local: pymunk.Vec2d, v0, w0) -> pymunk.Vec2d:
@@ -38,7 +38,7 @@ def main() -> None:
     parser.add_argument("overrides", nargs="*", help="KEY=VALUE")
     args = parser.parse_args()
     case = load_case(Path("cases") / f"{args.case}.toml", overrides=args.overrides)
-    sim = Simulation(scene_spec(case))
+    sim = Simulation(compile_case(case))
     pivots = [c for c in sim.machine.space.constraints if isinstance(c, pymunk.PivotJoint)]
     impulses = JointImpulses(pivots)
     work = at_b = 0.0

@@ -52,7 +52,7 @@ from perga.contact.soft.polygon_forces import Candidates, polygon_contact
 from perga.contact.soft.polygon_set import PolygonArrays, TableArrays
 from perga.engine import Simulation
 from perga.geometry.disc_polygon import FASTMATH, bounding_radii
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,7 +74,7 @@ def chamber() -> SoftGranules:
 def separator() -> SoftGranules:
     """``benchmarks/cases/soft-separator-1000.toml`` at t = 5 ms."""
     case = load_case(ROOT / "benchmarks/cases/soft-separator-1000.toml", ["solver.threads=1"])
-    sim = Simulation(scene_spec(case), record_impacts=False, track_energy=False)
+    sim = Simulation(compile_case(case), record_impacts=False, track_energy=False)
     while sim.time < 0.005:
         sim.step()
     return sim.contacts.granules

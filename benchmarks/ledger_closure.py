@@ -17,7 +17,7 @@ from pathlib import Path
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 
 def main() -> None:
@@ -30,7 +30,7 @@ def main() -> None:
         case = load_case(Path("cases") / f"{name}.toml", overrides=args.set)
         if case.chamber is None:
             continue  # a parameter set, not a scene
-        sim = Simulation(scene_spec(case))
+        sim = Simulation(compile_case(case))
         rows = []
         with sim.contacts.running():
             for t in (1e-4, 0.001, 0.01, case.solver.duration):

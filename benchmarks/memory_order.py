@@ -27,7 +27,7 @@ from soft_scaling import CASE, overrides
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 
 def morton_order(points: np.ndarray, cell: float) -> np.ndarray:
@@ -47,7 +47,7 @@ def morton_order(points: np.ndarray, cell: float) -> np.ndarray:
 
 def measure(n: int, warm: int, blocks: int, steps: int) -> dict[str, float]:
     """ns per granule-step of each order at ``n`` granules."""
-    spec = scene_spec(load_case(CASE, overrides=[*overrides("finer", n), "solver.threads=1"]))
+    spec = compile_case(load_case(CASE, overrides=[*overrides("finer", n), "solver.threads=1"]))
     radius = spec.granules[0].radius
     points = np.array([g.position for g in spec.granules])
     orders = {

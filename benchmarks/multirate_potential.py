@@ -33,7 +33,7 @@ from scipy.spatial import cKDTree
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = {
@@ -119,7 +119,7 @@ def main() -> None:
     for name in args.cases:
         path, duration = CASES[name]
         case = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
-        sim = Simulation(scene_spec(case), record_impacts=False, track_energy=False)
+        sim = Simulation(compile_case(case), record_impacts=False, track_energy=False)
         k = sim.contacts.substeps
         bounds = (False, True) if args.local else (False,)
         shares: dict[tuple[bool, int], list[float]] = {

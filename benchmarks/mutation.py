@@ -55,12 +55,12 @@ MODULES = {
         ("tests/contact/soft/test_restitution.py", "tests/contact/soft/test_chung_ooi.py"),
     ),
     "timestep": Module(
-        "src/perga/case/timestep.py",
+        "src/perga/model/plan.py",
         (
-            "tests/case/test_timestep.py",
-            "tests/case/test_pair_stiffness.py",
-            "tests/case/test_materials.py",
-            "tests/case/test_tangential_stiffness.py",
+            "tests/model/test_plan.py",
+            "tests/model/test_pair_stiffness.py",
+            "tests/model/test_materials.py",
+            "tests/model/test_tangential_stiffness.py",
         ),
     ),
     "records": Module(

@@ -1,7 +1,7 @@
 """Issue 16 (must show): the restitution a soft contact gives against the e asked for, at the
 default step, for e in {0.05, 0.1, 0.3, 0.6, 0.8, 0.95}: a granule on a wall and on a granule
 (the kernel alone, at the step plan's steps for that contact's damping,
-``perga.case.timestep.steps_for_damping``: ``tests/contact/soft/helpers.impact``, 10 m/s),
+``perga.model.plan.steps_for_damping``: ``tests/contact/soft/helpers.impact``, 10 m/s),
 and on a 5 g and a 200 g hinged hammer (``cases/soft-single-granule.toml`` through
 ``Simulation``, one granule step per machine step, the step plan's own step), linear and Hertz
 (by duration, 0.1 ms). e below e^-2 ≈ 0.135 is out of reach of a contact that ends at zero
@@ -22,7 +22,7 @@ from tests.contact.soft.helpers import impact
 from tests.test_soft_run import hammer_restitution
 
 from perga.analytic.contact import FORCE_END_MIN_RESTITUTION, damping_ratio
-from perga.case.timestep import steps_for_damping
+from perga.model.plan import steps_for_damping
 
 E = (0.05, 0.1, 0.3, 0.6, 0.8, 0.95)
 

@@ -37,7 +37,7 @@ from perga.case import load_case
 from perga.contact.soft import SoftGranules
 from perga.contact.soft.laws import P_MU, P_MUR
 from perga.engine import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 SEPARATOR = Path(__file__).resolve().parents[1] / "cases" / "soft-separator.toml"
 
@@ -64,7 +64,7 @@ def bed_block(
 
 def separator_state() -> SoftGranules:
     """The soft separator's granules at t = 0.1 s (one thread)."""
-    spec = scene_spec(load_case(SEPARATOR))
+    spec = compile_case(load_case(SEPARATOR))
     sim = Simulation(spec, record_impacts=False, track_energy=False)
     g = sim.contacts.granules
     g.set_threads(1)

@@ -87,12 +87,12 @@ def one(family: str, n: int, warm: int, steps: int) -> None:
 
     from perga.case import load_case
     from perga.engine.simulation import Simulation
-    from perga.model.from_case import scene_spec
+    from perga.model.compile import compile_case
 
     numba.set_num_threads(1)
     start = time.perf_counter()
     case = load_case(CASE, overrides=[*overrides(family, n), "solver.threads=1"])
-    sim = Simulation(scene_spec(case), record_impacts=True, track_energy=True)
+    sim = Simulation(compile_case(case), record_impacts=True, track_energy=True)
     built = time.perf_counter() - start
     for _ in range(warm):
         sim.step()

@@ -27,7 +27,7 @@ import numpy as np
 from perga.case import load_case
 from perga.contact.soft.model import ANGULAR_IMPULSE
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -72,7 +72,7 @@ def main() -> None:
     parser.add_argument("--start", type=float, default=0.15, help="simulated s before timing")
     parser.add_argument("--steps", type=int, default=3000)
     args = parser.parse_args()
-    spec = scene_spec(load_case(args.case, overrides=["solver.threads=1"]))
+    spec = compile_case(load_case(args.case, overrides=["solver.threads=1"]))
     reference, copy = Simulation(spec), Simulation(spec)
     for _ in range(200):
         reference.step()

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from perga.case import load_case
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -32,7 +32,7 @@ def decay_rate(sets: list[str]) -> float:
 
 def main() -> None:
     case = load_case(CASE)
-    spec = scene_spec(case)
+    spec = compile_case(case)
     r, m = case.granules.radius, case.granules.mass
     k_n = spec.contact("beebread", "steel").stiffness
     delta = m * float(np.hypot(*spec.gravity)) / k_n

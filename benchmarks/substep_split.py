@@ -19,14 +19,14 @@ import tomli_w
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASE = Path("cases/bee-bread-separator.toml")
 
 
 def residual(case_path: Path, duration: float, overrides: list[str]) -> tuple[float, float]:
     """(the ledger's residual, J; its closure) after ``duration`` s."""
-    sim = Simulation(scene_spec(load_case(case_path, overrides=overrides)))
+    sim = Simulation(compile_case(load_case(case_path, overrides=overrides)))
     sim.run(duration)
     e = sim.energy()
     change = e.kinetic - e.kinetic_initial + e.elastic - e.elastic_initial

@@ -13,7 +13,7 @@ import perga
 CASES = Path(__file__).resolve().parents[1] / "cases"
 
 case = perga.load_case(CASES / "single-granule.toml", overrides=["rotor.rpm=900"])
-sim = perga.Simulation(perga.scene_spec(case))
+sim = perga.Simulation(perga.compile_case(case))
 for t in (0.01, 0.02, 0.03, 0.04):
     sim.run(t - sim.time)
     speed = np.hypot(*sim.frame().granules.velocities[0])

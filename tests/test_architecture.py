@@ -198,14 +198,14 @@ def test_a_circle_is_seen() -> None:
         ("perga.contact.soft.model", "perga.contact.rigid.bodies"),
         ("perga.contact.soft.model", "perga.engine.simulation.Simulation"),
         ("perga.output.vtk", "perga.contact.soft.polygon_set"),
-        ("perga.case.checks", "perga.model.spec"),
+        ("perga.case.load", "perga.model.system"),
         ("perga.stats.energy", "perga.machine.energy"),
         ("perga.run", "perga.contact.rigid.model"),
         ("perga.studies.compare", "perga.cli"),
         ("perga.model.frame", "perga.output.tables"),
         ("perga.contact.laws.hertz", "perga.contact.soft.laws"),
         ("perga.contact.laws.base", "perga.case.schema"),
-        ("perga.case.timestep", "perga.contact.soft.laws"),
+        ("perga.model.plan", "perga.contact.soft.laws"),
     ],
 )
 def test_the_rules_catch_a_forbidden_import(module: str, name: str) -> None:
@@ -223,7 +223,7 @@ def test_the_rules_catch_a_forbidden_import(module: str, name: str) -> None:
         ("perga.engine.simulation", "perga.machine.compiled.compiled_machine"),
         ("perga.run", "perga.engine.simulation"),
         ("perga.output.vtk", "perga.model.frame"),
-        ("perga.case.timestep", "perga.contact.laws.contact_law"),
+        ("perga.model.plan", "perga.contact.laws.contact_law"),
         ("perga.contact.laws.hertz", "perga.analytic.contact.HertzTsuji"),
         ("perga.contact.soft.laws", "perga.contact.laws.row.P_KN"),
     ],
@@ -410,8 +410,8 @@ def contact_parts_loaded(case: Path) -> list[str]:
     simulation and stepping it three times."""
     code = (
         "import sys; from perga.case import load_case; from perga.engine import Simulation;"
-        "from perga.model.from_case import scene_spec;"
-        f"sim = Simulation(scene_spec(load_case({str(case)!r}))); sim.run(3 * sim.dt);"
+        "from perga.model.compile import compile_case;"
+        f"sim = Simulation(compile_case(load_case({str(case)!r}))); sim.run(3 * sim.dt);"
         "print(' '.join(sorted({m.split('.')[2] for m in sys.modules"
         " if m.startswith('perga.contact.')})))"
     )

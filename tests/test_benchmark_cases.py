@@ -7,7 +7,7 @@ import pytest
 
 from perga.case import load_case
 from perga.engine import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASES = sorted((Path(__file__).resolve().parents[1] / "benchmarks" / "cases").glob("*.toml"))
 
@@ -16,7 +16,7 @@ CASES = sorted((Path(__file__).resolve().parents[1] / "benchmarks" / "cases").gl
 def test_benchmark_case_runs(path: Path) -> None:
     """Valid, and 20 machine steps leave every granule finite with the energy ledger closing
     within the project's 1 % (the ledger is measured from the start)."""
-    sim = Simulation(scene_spec(load_case(path, overrides=["solver.threads=1"])))
+    sim = Simulation(compile_case(load_case(path, overrides=["solver.threads=1"])))
     sim.run(20 * sim.dt)
     assert np.isfinite(sim.frame().granules.positions).all()
     assert np.isfinite(sim.frame().granules.velocities).all()

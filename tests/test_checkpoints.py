@@ -20,7 +20,7 @@ import pytest
 
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 from perga.run import checkpoints
 from tests.run_files import assert_same_outputs, outputs
 
@@ -183,7 +183,7 @@ def test_a_soft_simulation_goes_on_from_its_checkpoint_bit_for_bit(case):
     """The soft kernel's state is arrays and the machine's Pymunk space has no contacts: a
     round trip through a checkpoint changes nothing (the rigid engine's does change the order
     in which Chipmunk solves contacts: module doc of perga.run.checkpoints)."""
-    sim = Simulation(scene_spec(load_case(ROOT / "cases" / case)))
+    sim = Simulation(compile_case(load_case(ROOT / "cases" / case)))
     with sim.contacts.running():
         for _ in range(2000):
             sim.step()

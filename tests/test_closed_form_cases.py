@@ -1,5 +1,5 @@
 """The closed forms of design §4 reproduced by the engine, each through a real case file in
-``tests/cases/closed-form/``: load_case -> scene_spec -> Simulation at the case's
+``tests/cases/closed-form/``: load_case -> compile_case -> Simulation at the case's
 bundled time step (``solver.dt``), compared with :mod:`perga.analytic`.
 
 Every geometric input of a closed form (face offset h, start x0 and v0, strike distance a,
@@ -26,16 +26,16 @@ from perga.analytic.impact import (
     oblique_impact,
 )
 from perga.analytic.sliding import BladeSlide, frictionless_exit
-from perga.case import Case, CaseError, load_case
+from perga.case import Case, CaseError
 from perga.engine import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case, validated
 
 CASES = Path(__file__).resolve().parent / "cases" / "closed-form"
 REQUIRED = 1e-3  # the issue's requirement: relative error <= 1e-3 at the bundled time steps
 
 
 def _simulation(case: Case, **kwargs) -> Simulation:
-    return Simulation(scene_spec(case), **kwargs)
+    return Simulation(compile_case(case), **kwargs)
 
 
 def _cross(a, b) -> float:
@@ -111,7 +111,7 @@ def _blade_exit(case: Case, tip: float | None = None) -> tuple[float, float, flo
 
 
 def test_frictionless_bead_on_blade() -> None:
-    case = load_case(CASES / "blade-frictionless.toml")
+    case = validated(CASES / "blade-frictionless.toml")
     assert case.granule_hammer_contact.friction == 0.0 and not case.granules.rolls
     omega, x0, v0, h = _blade_start(case)
     tip = _blade_tip(case)
@@ -128,7 +128,7 @@ def test_frictionless_bead_on_blade() -> None:
 
 def test_blade_with_face_friction() -> None:
     """x'' + 2 f omega x' - omega^2 x = f omega^2 h on the leading face (BladeSlide)."""
-    case = load_case(CASES / "blade-face-friction.toml")
+    case = validated(CASES / "blade-face-friction.toml")
     f = case.granule_hammer_contact.friction
     assert f > 0 and not case.granules.rolls
     omega, x0, v0, h = _blade_start(case)
@@ -148,7 +148,7 @@ def test_sliding_point_from_rest_with_face_friction() -> None:
     time and speed to 1e-3 (measured 1.1e-4, 1.5e-4, 8.6e-5). Friction opposes x' from the
     start: taken at the granule's surface the contact slipped at x' - omega r, friction pushed
     the granule outwards while x' < omega r = 0.2 m/s, and x' at 2 ms was 4.4e-3 fast."""
-    case = load_case(CASES / "blade-face-friction-from-rest.toml")
+    case = validated(CASES / "blade-face-friction-from-rest.toml")
     f = case.granule_hammer_contact.friction
     assert f > 0 and not case.granules.rolls
     omega = case.rotor.angular_velocity
@@ -174,7 +174,7 @@ def test_sliding_point_from_rest_with_face_friction() -> None:
 
 def test_rolling_disc_on_blade() -> None:
     """(1 + 1/2) x'' = omega^2 x, held by face friction."""
-    case = load_case(CASES / "blade-rolling-disc.toml")
+    case = validated(CASES / "blade-rolling-disc.toml")
     f, r = case.granule_hammer_contact.friction, case.granules.radius
     assert case.granules.rolls
     omega, x0, v0, h = _blade_start(case)
@@ -221,7 +221,7 @@ def _substituted(tmp_path: Path, name: str, replacements: dict[str, str]) -> Cas
         assert count == 1, f"{old!r} occurs {count} times in {name}"
     path = tmp_path / name
     path.write_text(text, encoding="utf-8")
-    return load_case(path)
+    return validated(path)
 
 
 @pytest.mark.parametrize("m", GRANULE_MASSES, ids=lambda m: f"m={m * 1e6:g}mg")
@@ -274,7 +274,7 @@ def test_oblique_impact_with_friction(kind: str) -> None:
     the friction impulse). The face belongs to the kinematic rotor (infinite mass) turning at
     the tiny omega the schema requires; the closed form is applied in the frame of the face's
     contact point, which is exact for a face of infinite mass."""
-    case = load_case(CASES / f"oblique-impact-{kind}.toml")
+    case = validated(CASES / f"oblique-impact-{kind}.toml")
     g, contact = case.granules, case.granule_hammer_contact
     assert case.hammers.mount == "welded" and g.rolls
     omega = case.rotor.angular_velocity
@@ -322,7 +322,7 @@ def test_hinged_hammer_hits_free_granule() -> None:
     (measured d/a − 1 = 2.0e-4, 1.2e-4 at 1e-6 s: it does not vanish with dt); measured u 6.5e-5,
     ΔΩ 4.1e-4 (∝ d²) at 1e-5 s. Tolerance: the 1e-3 requirement.
     """
-    case = load_case(CASES / "hinged-impact.toml")
+    case = validated(CASES / "hinged-impact.toml")
     h, g = case.hammers, case.granules
     plate, e = case.hammer_plate, case.granule_hammer_contact.restitution
     assert case.granule_hammer_contact.friction == 0.0  # the closed form is frictionless
@@ -377,7 +377,7 @@ def test_hinged_hammer_swing_frequency() -> None:
     Measured at dt = 1e-5 s: period 2.0e-5 (6.0e-6 at 3e-6 s, first order in dt), Ω 4.5e-5,
     amplitude 2.0e-4. 1e-3 is the requirement, 50x above the period's error, so the test
     catches a wrong moment, centre of mass or hinge, not noise."""
-    case = load_case(CASES / "hinged-swing.toml")
+    case = validated(CASES / "hinged-swing.toml")
     h, plate = case.hammers, case.hammer_plate
     assert h.mount == "hinged" and h.count == 1 and h.hinge_friction == 0.0
     assert not case.effects.enabled
@@ -414,7 +414,7 @@ def test_successive_bounces_on_the_floor() -> None:
     (4.9e-8 m: 3e-6 of the sixth height). Tolerance: that interval, with 1e-12 m of round-off.
     Measured before the wall-bounce fix: +0.39, +1.0, +0.84, −0.41, +1.2 % (the round wall's
     corner under the axis turned the granule aside) and on a flat floor +0.017 to +0.16 %."""
-    case = load_case(CASES / "bouncing-granule.toml")
+    case = validated(CASES / "bouncing-granule.toml")
     sim = _simulation(case)
     r = case.granules.radius
     touch = -case.chamber.radius + r  # the lowest edge's middle, under the axis (circumscribed)
@@ -443,9 +443,9 @@ def test_a_soft_granule_rests_on_a_drawn_floor_at_its_static_overlap(wall: str) 
     refused at 0.99 δ; after 0.05 s still at δ to 1e-6 (measured 3e-12: the equilibrium is
     exact up to round-off; with a wall of the granules' own material the old R* = r/2 gave
     2^(1/3) δ, +26 %)."""
-    case = load_case(CASES / "resting-granule.toml")
+    case = validated(CASES / "resting-granule.toml")
     r, m = case.granules.radius, case.granules.mass
-    g = float(np.hypot(*scene_spec(case).gravity))
+    g = float(np.hypot(*compile_case(case).gravity))
     granule, floor = case.materials[case.granules.material], case.materials[wall]
     inverse = sum((1 - p.poisson_ratio**2) / p.youngs_modulus for p in (granule, floor))
     delta = (m * g / (4 / 3 / inverse * math.sqrt(r))) ** (2 / 3)
@@ -453,8 +453,8 @@ def test_a_soft_granule_rests_on_a_drawn_floor_at_its_static_overlap(wall: str) 
     y = -0.2 + r - delta
     start = [f'chamber.material="{wall}"', f"granules.placement.positions=[[0.15, {y}]]"]
     with pytest.raises(CaseError, match="overlaps the wall"):
-        load_case(path, overrides=[*start, f"granules.placement.overlap={0.99 * delta}"])
-    case = load_case(path, overrides=[*start, f"granules.placement.overlap={1.01 * delta}"])
+        validated(path, overrides=[*start, f"granules.placement.overlap={0.99 * delta}"])
+    case = validated(path, overrides=[*start, f"granules.placement.overlap={1.01 * delta}"])
     sim = _simulation(case)
     sim.run(0.05)
     overlap = r - (sim.frame().granules.positions[0][1] + 0.2)
@@ -503,8 +503,8 @@ def test_tangential_damping_decays_a_sticking_contact_at_its_rate(floor: str, tm
         )
         path = tmp_path / "round.toml"
         path.write_text(text)
-    case = load_case(path)
-    spec = scene_spec(case)
+    case = validated(path)
+    spec = compile_case(case)
     r, m = case.granules.radius, case.granules.mass
     k_n = spec.contact("beebread", "steel").stiffness
     delta = m * float(np.hypot(*spec.gravity)) / k_n  # resting: k_n δ = m g
@@ -512,12 +512,12 @@ def test_tangential_damping_decays_a_sticking_contact_at_its_rate(floor: str, tm
         f"granules.placement.positions=[[0.0, {-0.2 + r - delta!r}]]",
         f"granules.placement.overlap={1.01 * delta!r}",
     ]
-    damped = load_case(path, overrides=start)
+    damped = validated(path, overrides=start)
     zeta_t = damped.contact_model.tangential_damping
     assert zeta_t == 0.1 and damped.contacts[0].friction == 1.0
     rate, period = _slip_decay(damped)
     numerical, _ = _slip_decay(
-        load_case(path, overrides=[*start, "contact_model.tangential_damping=0.0"])
+        validated(path, overrides=[*start, "contact_model.tangential_damping=0.0"])
     )
     omega = math.sqrt(3 * damped.contact_model.tangential_ratio * k_n / m)
     zeta = math.sqrt(3) * zeta_t
@@ -546,7 +546,7 @@ def test_tangential_damping_on_both_sides_of_its_limits(sets: list[str], refused
     if "contact_model.kind='rigid'" in sets:
         path = Path(__file__).resolve().parents[1] / "cases" / "separator.toml"
     if refused is None:
-        load_case(path, overrides=sets)
+        validated(path, overrides=sets)
         return
     with pytest.raises(CaseError, match=refused):
-        load_case(path, overrides=sets)
+        validated(path, overrides=sets)

@@ -1,6 +1,7 @@
 """perga run: a case into a run directory that stays readable whatever happens."""
 
 import csv
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -10,6 +11,7 @@ import pytest
 
 from perga.case import CaseError, load_case
 from perga.cli import main
+from perga.model.compile import compile_case
 from perga.run import RunStoppedError, prepare_directory, run_case
 from perga.stats.metrics import evaluate
 from perga.stats.tables import load_run
@@ -87,12 +89,13 @@ def test_interrupt_keeps_what_was_written(tmp_path):
 def test_granule_outside_the_wall_stops_the_run_with_a_diagnostic(tmp_path):
     case_path = short_case(tmp_path)
     case = load_case(case_path)
-    # a wall that no longer encloses the granule (bypassing validation on purpose)
-    broken = case.model_copy(update={"chamber": case.chamber.model_copy(update={"radius": 0.09})})
+    system = compile_case(case)
+    # a wall that no longer encloses the granule (past the case's checks on purpose)
+    broken = dataclasses.replace(system, chamber=dataclasses.replace(system.chamber, radius=0.09))
     out = tmp_path / "run"
     prepare_directory(out, overwrite=False)
     with pytest.raises(RunStoppedError, match=r"granule 0 left the chamber .* reduce solver.dt"):
-        run_case(broken, case_path, out)
+        run_case(case, case_path, out, system=broken)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed"
     assert "granule 0 left the chamber" in summary["reason"]
@@ -114,11 +117,11 @@ def test_separator_energy_ledger_closes_within_one_percent(tmp_path):
 
 def test_non_finite_state_stops_with_a_diagnostic(tmp_path):
     from perga.engine.simulation import Simulation
-    from perga.model.from_case import scene_spec
+    from perga.model.compile import compile_case
     from perga.run.guards import check_granules
 
     case = load_case(short_case(tmp_path))
-    sim = Simulation(scene_spec(case))
+    sim = Simulation(compile_case(case))
     sim.step()
     sim.contacts.bodies.granule_bodies[0].velocity = (float("nan"), 0.0)
     with pytest.raises(RunStoppedError, match=r"step 1 .* granule 0 has a non-finite .* reduce"):

@@ -174,11 +174,11 @@ def hammer_restitution(model: str, e: float, end: str, mass: float) -> float:
     step per machine step at the step plan's step: −v_n after / v_n before, relative to the
     hammer's material point."""
     from perga.engine.simulation import Simulation
-    from perga.model.from_case import scene_spec
+    from perga.model.compile import compile_case
 
     sets = [f"hammers.mass={mass}", f"contacts[0].restitution={e}", f'contact_model.end="{end}"',
             f'contact_model.kind="{model}"', "contact_model.granule_substeps=1"]  # fmt: skip
-    sim = Simulation(scene_spec(load_case(SOFT, overrides=sets)), track_energy=False)
+    sim = Simulation(compile_case(load_case(SOFT, overrides=sets)), track_energy=False)
     with sim.contacts.running():
         while not sim.impacts and sim.time < 0.05:
             sim.step()

@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.cli import main
+from perga.model.compile import validated
 from perga.output.tables import read_columns
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -78,17 +79,17 @@ def test_a_resting_overlap_is_allowed_up_to_what_the_placement_states(allowed, a
     """Two granules of radius 2.5 mm whose centres are 5 mm − 10 µm apart overlap by 10 µm."""
     overrides = placed([[0.05, 0.0], [0.05 + 0.005 - 1e-5, 0.0]], allowed)
     if accepted:
-        load_case(SINGLE, overrides=overrides)
+        validated(SINGLE, overrides=overrides)
     else:
         with pytest.raises(CaseError, match="granules 0 and 1 overlap"):
-            load_case(SINGLE, overrides=overrides)
+            validated(SINGLE, overrides=overrides)
 
 
 @pytest.mark.parametrize(("allowed", "accepted"), [(0.00124, True), (0.00125, False)])
 def test_the_allowed_overlap_stays_below_half_the_smallest_radius(allowed, accepted):
     overrides = placed([[0.05, 0.0]], allowed)
     if accepted:
-        load_case(SINGLE, overrides=overrides)
+        validated(SINGLE, overrides=overrides)
     else:
         with pytest.raises(CaseError, match="below half the smallest radius"):
-            load_case(SINGLE, overrides=overrides)
+            validated(SINGLE, overrides=overrides)

@@ -4,8 +4,9 @@ The Python API (each name imported on first use, so that ``import perga`` stays 
 
     import perga
 
-    case = perga.load_case("cases/separator.toml", overrides=["rotor.rpm=2000"])  # checked
-    sim = perga.Simulation(perga.scene_spec(case))   # the system, stepped in memory
+    case = perga.load_case("cases/separator.toml", overrides=["rotor.rpm=2000"])  # the file
+    system = perga.compile_case(case)                 # the system, built once and checked
+    sim = perga.Simulation(system)                    # stepped in memory
     sim.run(0.05)                                     # s
     frame = sim.frame()                               # the state now, read-only SI arrays
     frame.energy.closure, frame.granules.velocities   # the ledger, the granules' velocities
@@ -27,7 +28,7 @@ __version__ = "0.1.0"
 _API = {
     "load_case": "perga.case",
     "CaseError": "perga.case",
-    "scene_spec": "perga.model.from_case",
+    "compile_case": "perga.model.compile",
     "Simulation": "perga.engine.simulation",
     "simulate": "perga.run",
     "RunSummary": "perga.run",

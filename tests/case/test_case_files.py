@@ -6,8 +6,8 @@ import pytest
 
 from perga.case import CaseError, load_case
 from perga.case.reference import markdown_reference
-from perga.case.timestep import step_plan
 from perga.cli import main
+from perga.model.compile import check, compile_case
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted((ROOT / "cases").glob("*.toml"))
@@ -17,8 +17,9 @@ BAD = sorted((ROOT / "tests" / "cases" / "bad").glob("*.toml"))
 @pytest.mark.parametrize("path", BUNDLED, ids=lambda p: p.name)
 def test_bundled_case_validates(path):
     case = load_case(path)
+    check(case)
     if case.chamber is not None:
-        assert 0 < step_plan(case).granule <= 0.01
+        assert 0 < compile_case(case).granule_dt <= 0.01
 
 
 @pytest.mark.parametrize("path", BAD, ids=lambda p: p.name)
@@ -30,7 +31,7 @@ def test_bad_case_fails_with_every_expected_message(path, capsys):
     ]
     assert expected, f"{path.name} declares no '# expect:' line"
     with pytest.raises(CaseError) as info:
-        load_case(path)
+        check(load_case(path))
     for message in expected:
         assert any(message in problem for problem in info.value.problems), (message, info.value)
     assert all(problem.startswith(f"{path}: ") for problem in info.value.problems)

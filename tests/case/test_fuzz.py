@@ -19,9 +19,9 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case, validated
 from tests.value_paths import value_paths
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -36,9 +36,9 @@ def compiled() -> None:
     """Every bundled case built once, so that numba's one-time compilation (11 s for the soft
     kernel in a fresh clone with another job on the second core) is not timed as a mutant's."""
     for name in BUNDLED:
-        case = load_case(ROOT / "cases" / name)
+        case = validated(ROOT / "cases" / name)
         if case.chamber is not None:
-            Simulation(scene_spec(case))
+            Simulation(compile_case(case))
 
 
 ODD_VALUES = st.sampled_from(
@@ -92,12 +92,12 @@ def test_a_mutated_case_loads_or_is_refused_with_its_problems(mutant, tmp_path_f
     path.write_text(text, encoding="utf-8")
     start = time.monotonic()
     try:
-        case = load_case(path)
+        case = validated(path)
     except CaseError as exc:
         assert exc.problems and all(p.startswith(f"{path}: ") for p in exc.problems)
     else:
         if case.chamber is not None:
-            Simulation(scene_spec(case))
+            Simulation(compile_case(case))
     assert time.monotonic() - start < SECONDS
 
 
@@ -107,7 +107,7 @@ def test_bytes_that_are_no_case_file_are_refused(garbage, tmp_path_factory):
     path = tmp_path_factory.mktemp("fuzz") / "garbage.toml"
     path.write_bytes(garbage)
     try:
-        load_case(path)
+        validated(path)
     except CaseError as exc:
         assert all(p.startswith(f"{path}: ") for p in exc.problems)
 
@@ -163,9 +163,9 @@ def test_a_broken_geometry_file_loads_or_is_refused(broken, tmp_path_factory):
     path.write_text(text)
     start = time.monotonic()
     try:
-        loaded = load_case(path)
+        loaded = validated(path)
     except CaseError as exc:
         assert exc.problems
     else:
-        Simulation(scene_spec(loaded))
+        Simulation(compile_case(loaded))
     assert time.monotonic() - start < SECONDS

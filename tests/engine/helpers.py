@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from perga.engine import Simulation
-from perga.model import ContactSpec, EffectsSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, EffectsSpec, GranuleSpec, HammerSpec, RotorSpec, System
 
 
 def rectangle(x0: float, x1: float, y0: float, y1: float) -> tuple[tuple[float, float], ...]:
@@ -76,8 +76,8 @@ def blade_exit(
         rolls=rolls,
         angular_velocity=omega + spin,
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=omega, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=omega, radius=0.2),
         hammers=(blade,),
         granules=(granule,),
         contacts=(ContactSpec("beebread", "steel", restitution=0.0, friction=face_friction),),

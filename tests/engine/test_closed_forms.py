@@ -14,7 +14,7 @@ from perga.model import (
     FloorFrictionSpec,
     GranuleSpec,
     RotorSpec,
-    SceneSpec,
+    System,
 )
 from tests.engine.helpers import blade_exit, plate
 
@@ -75,8 +75,8 @@ def test_oblique_impact_on_fixed_wall(v_t: float, e: float, f: float, sticks: bo
     granule = GranuleSpec(
         position=(0.0, RADIUS + 1e-5), velocity=(v_t, v_n), radius=RADIUS, mass=m, material="bb"
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(wall,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=e, friction=f),),

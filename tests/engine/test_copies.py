@@ -16,7 +16,7 @@ import pytest
 from perga.case import load_case
 from perga.engine.simulation import Simulation
 from perga.machine.chipmunk_state import capture
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASES = Path(__file__).resolve().parents[2] / "cases"
 COPIES = {
@@ -26,7 +26,7 @@ COPIES = {
 
 
 def stepped(case: str, seconds: float) -> Simulation:
-    sim = Simulation(scene_spec(load_case(CASES / case)))
+    sim = Simulation(compile_case(load_case(CASES / case)))
     sim.run(seconds)
     return sim
 

@@ -9,7 +9,7 @@ import pytest
 
 from perga.analytic.hammer import PlateHammer, swing_frequency, swing_period
 from perga.engine import Simulation
-from perga.model import RotorSpec, SceneSpec
+from perga.model import RotorSpec, System
 from tests.engine.helpers import plate
 
 # Measured: the period matches the exact pendulum period (elliptic integral) to 2.0e-5 at
@@ -30,9 +30,9 @@ def test_swing_frequency() -> None:
         swing_angle=amplitude,
     )  # fmt: skip
     assert hammer.moment_about_hinge == pytest.approx(ph.inertia_about_hinge, rel=1e-12)
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=omega, radius=0.2), hammers=(hammer,), granules=(), contacts=(),
-        granule_dt=DT,
+    spec = System(
+        rotor=RotorSpec(angular_velocity=omega, radius=0.2), hammers=(hammer,), granules=(),
+        contacts=(), granule_dt=DT,
     )  # fmt: skip
     sim = Simulation(spec, record_impacts=False)
     big_omega = swing_frequency(omega, ph.mass, R, l_cg, ph.inertia_about_hinge)

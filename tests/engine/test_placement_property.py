@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from perga.case import CaseError, load_case
 from perga.engine import Simulation
 from perga.machine import units as u
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASE = """
 [rotor]
@@ -129,7 +129,7 @@ def test_nothing_starts_or_is_fed_inside_anything(
     except CaseError as refused:  # a pack that does not fit is refused, naming the key
         assert all("granules" in p or "feed" in p for p in refused.problems), refused.problems
         return
-    sim = Simulation(scene_spec(case))
+    sim = Simulation(compile_case(case))
     assert _overlaps(sim) == []
     for _ in range(20):
         before = sim.fed

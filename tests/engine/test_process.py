@@ -17,7 +17,7 @@ from perga.cli import main
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
 from perga.engine import Simulation
 from perga.engine.process import Damage, Feed
-from perga.model import GranuleSpec, RotorSpec, SceneSpec
+from perga.model import GranuleSpec, RotorSpec, System
 from perga.model.process import DamageSpec, FeedSpec, Sizes
 from perga.model.records import Impact
 from perga.output.process_figure import mass_flow
@@ -102,14 +102,14 @@ def test_feed_schedule() -> None:
     assert [capped.due(t) for t in (0.0, 0.011, 0.021, 0.5)] == [1, 2, 3, 3]
 
 
-def _held_granule_scene(bond: float) -> SceneSpec:
+def _held_granule_scene(bond: float) -> System:
     """One granule held in its cell under in-plane gravity, nothing else."""
     granule = GranuleSpec(
         position=(0.0, 0.1), velocity=(0.0, 0.0), radius=2.5e-3, mass=M, material="bb",
         bond_force=bond,
     )  # fmt: skip
-    return SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.02),
+    return System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.02),
         hammers=(),
         granules=(granule,),
         contacts=(),

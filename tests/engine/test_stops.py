@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from perga.engine import Simulation
-from perga.model import EffectsSpec, RotorSpec, SceneSpec
+from perga.model import EffectsSpec, RotorSpec, System
 
 from .helpers import plate
 
@@ -21,7 +21,7 @@ def _sim(swing_limit, dt=1e-4):
         hinge_radius=0.05, angle_on_rotor=0.0, mount="hinged", material="steel",
         swing_limit=swing_limit,
     )  # fmt: skip
-    spec = SceneSpec(
+    spec = System(
         rotor=RotorSpec(OMEGA, 0.12),
         hammers=(hammer,),
         granules=(),

@@ -21,7 +21,7 @@ from perga.machine import batch as state_module
 from perga.machine import units as u
 from perga.machine.batch import BodyReader, BodyWriter
 from perga.machine.machine import build_machine
-from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, System
 from tests.engine.helpers import plate
 
 OMEGA = 150.0  # rad/s: hammer tips at ~20 m/s
@@ -33,7 +33,7 @@ def _parts(bodies: RigidBodies) -> tuple:
     return bodies.space, bodies.granule_bodies
 
 
-def _spec(n_rings: int = 3) -> SceneSpec:
+def _spec(n_rings: int = 3) -> System:
     """Kinematic rotor; four hinged, one welded and one free hammer; a ring of rolling and
     sliding granules in the hammers' sweep, granule collisions on."""
 
@@ -73,8 +73,8 @@ def _spec(n_rings: int = 3) -> SceneSpec:
                     angular_velocity=OMEGA if k % 3 == 0 else 10.0 * math.cos(phi),
                 )
             )
-    return SceneSpec(
-        rotor=RotorSpec(omega=OMEGA, radius=0.07),
+    return System(
+        rotor=RotorSpec(angular_velocity=OMEGA, radius=0.07),
         hammers=tuple(hammers),
         granules=tuple(granules),
         contacts=(
@@ -223,10 +223,10 @@ def test_short_float_buffer_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None
         reader.positions()
 
 
-def _empty() -> SceneSpec:
+def _empty() -> System:
     """A rotor alone: no hammers, no granules."""
-    return SceneSpec(
-        rotor=RotorSpec(omega=10.0, radius=0.1),
+    return System(
+        rotor=RotorSpec(angular_velocity=10.0, radius=0.1),
         hammers=(),
         granules=(),
         contacts=(),

@@ -21,7 +21,7 @@ from perga.model import (
     FloorFrictionSpec,
     GranuleSpec,
     RotorSpec,
-    SceneSpec,
+    System,
 )
 from tests.engine.helpers import plate
 
@@ -52,8 +52,8 @@ def _sim(**effects: object) -> Simulation:
         GranuleSpec(position=(0.0, y), velocity=(1.0, 0.0), radius=0.002, mass=50e-6, material="bb")
         for y in (0.05, 0.06)
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=50.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=50.0, radius=0.2),
         hammers=hammers,
         granules=granules,
         contacts=(ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "wall", 0.5, 0.3)),
@@ -245,9 +245,9 @@ def test_air_drag_closed_form() -> None:
     k = 0.5 * rho * cd * 2 * r * th / m
     granule = GranuleSpec(position=(0.0, 0.0), velocity=(v0, 0.0), radius=r, mass=m,
                           material="bb")  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2), hammers=(), granules=(granule,), contacts=(),
-        granule_dt=1e-4, effects=EffectsSpec(air_drag=AirDragSpec(rho, cd, th)),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2), hammers=(), granules=(granule,),
+        contacts=(), granule_dt=1e-4, effects=EffectsSpec(air_drag=AirDragSpec(rho, cd, th)),
     )  # fmt: skip
     sim = Simulation(spec)
     sim.run(duration)
@@ -273,8 +273,8 @@ def test_chamber_wall_reflects_granules_and_ignores_hammers() -> None:
                    mount="hinged", material="steel")  # fmt: skip
     runs = []
     for chamber in (wall, None):
-        spec = SceneSpec(
-            rotor=RotorSpec(omega=50.0, radius=0.12),
+        spec = System(
+            rotor=RotorSpec(angular_velocity=50.0, radius=0.12),
             hammers=(hammer,),
             granules=(granule,),
             contacts=(ContactSpec("bb", "steel", 0.5, 0.0),)
@@ -300,5 +300,5 @@ def test_chamber_pair_needs_contact_parameters() -> None:
     granule = GranuleSpec(position=(0.1, 0.0), velocity=(0, 0), radius=0.002, mass=1e-5,
                           material="bb")  # fmt: skip
     with pytest.raises(ValueError, match=r"no contact parameters for materials \['bb', 'wall'\]"):
-        SceneSpec(RotorSpec(10.0, 0.2), (), (granule,), (), granule_dt=1e-5,
+        System(RotorSpec(10.0, 0.2), (), (granule,), (), granule_dt=1e-5,
                   chamber=ChamberSpec(0.25, 0.02, "wall"))  # fmt: skip

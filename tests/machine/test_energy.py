@@ -18,7 +18,7 @@ from perga.model import (
     GranuleSpec,
     LedgerTerms,
     RotorSpec,
-    SceneSpec,
+    System,
 )
 from tests.engine.helpers import plate
 
@@ -35,8 +35,8 @@ def _two_body(e: float, friction: float) -> Simulation:
         position=(0.05, 0.005 + R_G + 1e-4), velocity=(0.0, 0.0), radius=R_G, mass=50e-6,
         material="bb",
     )  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=e, friction=friction),),
@@ -76,8 +76,8 @@ def test_floor_friction_stops_a_granule() -> None:
     granule = GranuleSpec(
         position=(0.0, 0.0), velocity=(v0, 0.0), radius=R_G, mass=50e-6, material="bb"
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(),
         granules=(granule,),
         contacts=(),
@@ -112,8 +112,8 @@ def _hammer_scene(mount: str, dt: float, effects: EffectsSpec | None = None) -> 
         )
         for i, a in enumerate((0.02, 0.04, 0.06, 0.08))
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=100.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=100.0, radius=0.2),
         hammers=(hammer,),
         granules=granules,
         contacts=(ContactSpec("bb", "steel", restitution=0.6, friction=0.3),),
@@ -217,8 +217,8 @@ def test_drive_work_while_the_rotor_speed_changes() -> None:
         position=(R + 0.02, 0.01 + R_G + 1e-4), velocity=(0.0, 0.0), radius=R_G, mass=0.02,
         material="bb",
     )  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=100.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=100.0, radius=0.2),
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=0.6, friction=0.3),),
@@ -318,8 +318,8 @@ def test_in_plane_gravity_is_booked_to_the_step_split(mount: str) -> None:
         -0.01, 0.09, -0.01, 0.01, mass,
         hinge_radius=0.12, angle_on_rotor=0.3, mount=mount, material="steel",
     )  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=100.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=100.0, radius=0.2),
         hammers=(hammer,),
         granules=(),
         contacts=(),
@@ -383,8 +383,8 @@ def test_the_corotating_floors_work_is_drive_work() -> None:
     m·μ g dt·ωr through the floor (1e-12 relative: one kick, rounding). Over 0.05 s its work
     is drive work, and the ledger closes to rounding (each kick's energy is exact): 1e-12."""
     mu, omega, r, dt, g, m = 0.4, 100.0, 0.1, 1e-4, 9.80665, 50e-6
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=omega, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=omega, radius=0.2),
         hammers=(),
         granules=(GranuleSpec((r, 0.0), (0.0, 0.0), radius=R_G, mass=m, material="bb"),),
         contacts=(),

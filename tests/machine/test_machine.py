@@ -9,7 +9,7 @@ import pytest
 
 from perga.engine import Simulation
 from perga.geometry.polygon import is_convex, signed_area
-from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, System
 from tests.engine.helpers import plate, rectangle
 
 
@@ -19,8 +19,8 @@ def _head_on(granule_collisions: bool, contacts: tuple[ContactSpec, ...]) -> Sim
         GranuleSpec(position=(x, 0.0), velocity=(v, 0.0), radius=r, mass=50e-6, material="bb")
         for x, v in ((-0.005, 5.0), (0.005, -5.0))
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(),
         granules=granules,
         contacts=contacts,
@@ -52,9 +52,9 @@ def test_missing_and_unused_pairs_are_errors() -> None:
     hammer = plate(0, 0.1, -0.01, 0.01, 0.05, hinge_radius=0.1, angle_on_rotor=0.0,
                    mount="hinged", material="steel")  # fmt: skip
     with pytest.raises(ValueError, match=r"no contact parameters for materials \['bb', 'steel'\]"):
-        SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (granule,), (), granule_dt=1e-5)
+        System(RotorSpec(10.0, 0.2), (hammer,), (granule,), (), granule_dt=1e-5)
     with pytest.raises(ValueError, match="unused"):
-        SceneSpec(
+        System(
             RotorSpec(10.0, 0.2), (hammer,), (granule,),
             (ContactSpec("bb", "steel", 0.5, 0.3), ContactSpec("bb", "bb", 0.5, 0.3)),
             granule_dt=1e-5,
@@ -79,7 +79,7 @@ def test_hinged_hammer_pose_and_mass_properties() -> None:
     omega, R, phi = 50.0, 0.1, 0.7
     hammer = plate(-0.01, 0.09, -0.01, 0.01, 0.078, hinge_radius=R, angle_on_rotor=phi,
                    mount="hinged", material="steel", swing_angle=0.1)  # fmt: skip
-    spec = SceneSpec(RotorSpec(omega, 0.2), (hammer,), (), (), granule_dt=1e-5)
+    spec = System(RotorSpec(omega, 0.2), (hammer,), (), (), granule_dt=1e-5)
     sim = Simulation(spec)
     body = sim.machine.hammer_bodies[0]
     assert body.mass * 1e-3 == pytest.approx(0.078, rel=1e-12)
@@ -110,7 +110,7 @@ def test_concave_outline_becomes_convex_pieces_on_one_body() -> None:
     assert sum(signed_area(p) for p in hammer.pieces) == pytest.approx(
         signed_area(notch), rel=1e-12
     )
-    sim = Simulation(SceneSpec(RotorSpec(10.0, 0.2), (hammer,), (), (), granule_dt=1e-5))
+    sim = Simulation(System(RotorSpec(10.0, 0.2), (hammer,), (), (), granule_dt=1e-5))
     shapes = sim.machine.hammer_shapes[0]
     assert len(shapes) == 2
     assert all(s.body is sim.machine.hammer_bodies[0] for s in shapes)

@@ -15,7 +15,7 @@ from perga.machine.batch import BodyReader
 from perga.machine.chipmunk_state import JointImpulses
 from perga.machine.effects import ConstraintLosses, HingeFriction, SwingStops
 from perga.machine.machine import write_loads
-from perga.model import DriveSpec, EffectsSpec, RotorSpec, SceneSpec
+from perga.model import DriveSpec, EffectsSpec, RotorSpec, System
 from tests.engine.helpers import plate
 
 
@@ -34,7 +34,7 @@ def _sim(effects: EffectsSpec, gravity: tuple[float, float] = (0.0, 0.0)) -> Sim
         bar("welded", 3.0),
         bar("free", 4.5, velocity=(0.3, -0.2), angular_velocity=2.0),
     )
-    spec = SceneSpec(
+    spec = System(
         rotor=RotorSpec(2.0, 0.12),
         hammers=hammers,
         granules=(),

@@ -30,8 +30,8 @@ from perga.contact.soft.polygon_set import HIST_ACTIVE
 from perga.engine import Simulation
 from perga.machine import units as u
 from perga.model import ContactSpec
-from perga.model.from_case import scene_spec
-from perga.model.spec import SceneSpec
+from perga.model.compile import compile_case
+from perga.model.system import System
 from perga.output.vtk import (
     CHAMBER_SEGMENTS,
     ROTOR_SIDES,
@@ -72,12 +72,12 @@ class Run:
     pvd_after_record: list[list[tuple[float, str]]]
 
 
-def spec_near_hammer(soft: bool) -> SceneSpec:
+def spec_near_hammer(soft: bool) -> System:
     """The single-granule case with the granule 0.5 mm ahead of the hammer's leading face (so it
     is struck within the first frames) and, for soft contacts, a second granule overlapping it by
     0.1 mm (granule pairs on)."""
     name = "soft-single-granule" if soft else "single-granule"
-    spec = scene_spec(load_case(CASES / f"{name}.toml"))
+    spec = compile_case(load_case(CASES / f"{name}.toml"))
     g = spec.granules[0]
     granules = [dataclasses.replace(g, position=(0.11, 0.0125 + 0.0005))]
     if not soft:
@@ -354,7 +354,7 @@ def test_impacts_round_trip(run: Run) -> None:
 
 
 def test_no_impacts_leaves_an_empty_readable_file(tmp_path: Path) -> None:
-    spec = scene_spec(load_case(CASES / "single-granule.toml"))
+    spec = compile_case(load_case(CASES / "single-granule.toml"))
     sim = Simulation(spec)
     recorder = VtkRecorder(tmp_path, sim.spec)
     recorder.record(sim.frame(), sim.events())
@@ -432,7 +432,7 @@ def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
         assert result.returncode == 0, result.stdout[-3000:]
         return
 
-    spec = scene_spec(load_case(CASES / "separator.toml"))
+    spec = compile_case(load_case(CASES / "separator.toml"))
     spec = dataclasses.replace(spec, granules=spec.granules * 10)
     sim = Simulation(spec)
     n = len(spec.granules)

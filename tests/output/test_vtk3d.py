@@ -21,15 +21,15 @@ import pyvista as pv
 import trimesh
 
 from perga.case import load_case
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.parts import rotor_geometry
 from perga.case.schema import Case
 from perga.cli import main
 from perga.engine import Simulation
 from perga.geometry.polygon import outline_or_circle, signed_area
 from perga.geometry.wall import wall_pieces
-from perga.model.from_case import scene_spec
-from perga.model.spec import DrawingSpec
+from perga.model.compile import compile_case
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.parts import rotor_geometry
+from perga.model.system import DrawingSpec
 from perga.output.vtk import CHAMBER_SEGMENTS, ROTOR_SIDES, VtkRecorder
 from tests.output.test_vtk import Frame, both, read_pvd, snapshot
 
@@ -59,7 +59,7 @@ class Run3D:
 def run3d(tmp_path_factory: pytest.TempPathFactory) -> Run3D:
     """The separator (six plate hammers, 300 granules), each hammer drawn with its own
     thickness so that a mix-up between hammers shows."""
-    spec = scene_spec(with_3d(load_case(CASES / "separator.toml")))
+    spec = compile_case(with_3d(load_case(CASES / "separator.toml")))
     assert spec.drawing is not None
     drawing = dataclasses.replace(
         spec.drawing, hammer_thickness=tuple(0.003 + 0.001 * k for k in range(len(spec.hammers)))
@@ -82,15 +82,15 @@ def test_drawing_from_case() -> None:
     hammers'; chamber: the tallest part; granules: the case's thickness; none without the
     option."""
     separator = load_case(CASES / "separator.toml")
-    assert scene_spec(separator).drawing is None
-    d = scene_spec(with_3d(separator)).drawing
+    assert compile_case(separator).drawing is None
+    d = compile_case(with_3d(separator)).drawing
     plate = separator.hammer_plate.thickness
     assert d == DrawingSpec(
         (plate,) * 6, plate, max(plate, separator.granule_thickness), separator.granule_thickness
     )
     for name in ("plate-hammers-soft", "geometry-hammers"):
         case = load_case(CASES / f"{name}.toml")
-        d = scene_spec(with_3d(case)).drawing
+        d = compile_case(with_3d(case)).drawing
         hammer = hammer_geometry(case).thickness
         disc = rotor_geometry(case)
         rotor = hammer if disc is None else disc.thickness

@@ -166,14 +166,14 @@ def test_bounce_references() -> None:
     without gravity: one contact of the clamped linear law rebounds with e (the closed form
     of perga.analytic.contact) to solve_ivp's tolerance."""
     scene = bounce_scene(9.80665)
-    rigid = BounceReference(scene.case(Setting("rigid", dt=1e-4)), scene.duration)
+    rigid = BounceReference(scene.case(Setting("rigid", dt=1e-4))[0], scene.duration)
     g, drop, e = 9.80665, 5e-3, 0.8
     v = math.sqrt(2 * g * drop)
     touch = [v / g + sum(2 * v * e**k / g for k in range(1, n)) for n in (1, 2, 3)]
     ends = [p.t1 for p in rigid.pieces][:3]
     assert ends == pytest.approx(touch, rel=1e-12)
 
-    case = scene.case(Setting("linear", steps_per_contact=50))
+    case, _ = scene.case(Setting("linear", steps_per_contact=50))
     law = soft_contact_law(case)
     piece, v_out = _soft_contact(0.0, v, 0.0, case.granule_mass, law, 0.0)
     expected = LinearSpringDashpot.from_duration(1e-4, e, case.granule_mass, "force")
@@ -184,7 +184,7 @@ def test_bounce_references() -> None:
 def test_hinged_reference_matches_the_ideal_strike() -> None:
     """At the strike distance the exact contact pose differs from the ideal (lever arm = a,
     contact speed ω(R + a)) only by the 1 mm gap's rotation: within 1 %."""
-    case = hinged_scene().case(Setting("rigid", dt=1e-5))
+    case, _ = hinged_scene().case(Setting("rigid", dt=1e-5))
     plate, m = case.hammer_plate, case.granule_mass
     omega, R, a = 100.0, 0.12, 0.06
     m_eff = plate.inertia_about_hinge / a**2

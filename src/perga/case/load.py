@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from perga.case.checks import check_case
+from perga.case.names import name_problems
 from perga.case.overrides import OverrideError, apply_overrides, split_override
 from perga.case.schema import NOT_A_NUMBER, Case
 
@@ -118,15 +118,16 @@ def overridden(data: dict[str, Any], overrides: Sequence[str], path: str | Path)
 
 def validate_case(data: dict[str, Any], path: str | Path, source_dir: Path | None = None) -> Case:
     """Validate a case's TOML data; problems name ``path``. Raises :class:`CaseError` listing
-    every problem: the schema's all at once, then (they need valid fields) every physical
-    cross-check (:mod:`perga.case.checks`)."""
+    every problem: the schema's all at once, then (they need valid fields) the names'
+    (:mod:`perga.case.names`). The physical cross-checks run when the case is compiled into
+    a system (:func:`perga.model.compile.compile_case`)."""
     path = Path(path)
     try:
         case = Case.model_validate(data)
     except ValidationError as exc:
         raise CaseError([f"{path}: {_describe(err)}" for err in exc.errors()]) from None
-    case.attach_source(source_dir or path.resolve().parent, data)
-    problems = check_case(case)
+    case.attach_source(source_dir or path.resolve().parent, data, path=path)
+    problems = name_problems(case)
     if problems:
         raise CaseError([f"{path}: {problem}" for problem in problems])
     return case
@@ -135,8 +136,9 @@ def validate_case(data: dict[str, Any], path: str | Path, source_dir: Path | Non
 def load_case(
     path: str | Path, source_dir: Path | None = None, overrides: Sequence[str] = ()
 ) -> Case:
-    """Parse and validate a case file, with ``KEY=VALUE`` ``overrides`` applied first (checked
-    exactly like the file); raises :class:`CaseError` listing every problem.
+    """Parse and validate a case file (its schema and names, :func:`validate_case`), with
+    ``KEY=VALUE`` ``overrides`` applied first (checked exactly like the file); raises
+    :class:`CaseError` listing every problem.
 
     Relative geometry paths start at ``source_dir`` (default: the case file's folder; a run
     directory's copy of a case passes its original folder).
@@ -145,5 +147,5 @@ def load_case(
     if overrides:
         data = overridden(data, overrides, path)
     case = validate_case(data, path, source_dir)
-    case.attach_source(case.source_dir, data, tuple(overrides))
+    case.attach_source(case.source_dir, data, tuple(overrides), path=Path(path))
     return case

@@ -32,7 +32,7 @@ HEADER = """# Case files
 
 Generated from `perga.case.schema` by `perga schema --markdown` (a test checks that this page is
 current). SI units throughout. Unknown keys are errors with a "did you mean" hint; `perga validate
-CASE...` checks the schema and the physical cross-checks (`perga.case.checks`) and lists every
+CASE...` checks the schema and the physical cross-checks (`perga.model.checks`) and lists every
 problem. `perga schema` prints the JSON Schema.
 """
 

@@ -949,13 +949,24 @@ class Case(Strict):
     _source_dir: Path | None = PrivateAttr(None)
     _data: dict | None = PrivateAttr(None)
     _overrides: tuple[str, ...] = PrivateAttr(())
+    _path: Path | None = PrivateAttr(None)
 
     def attach_source(
-        self, folder: Path | None, data: dict | None, overrides: tuple[str, ...] = ()
+        self,
+        folder: Path | None,
+        data: dict | None,
+        overrides: tuple[str, ...] = (),
+        path: Path | None = None,
     ) -> None:
         """Record where the case came from: its file's folder, the TOML data it was validated
-        from and the overrides applied to it."""
+        from, the overrides applied to it and the file as named."""
         self._source_dir, self._data, self._overrides = folder, data, overrides
+        self._path = path
+
+    @property
+    def source_path(self) -> Path | None:
+        """The case file as it was named when loaded (problems name it), or None."""
+        return self._path
 
     @property
     def source_data(self) -> dict | None:
@@ -1014,7 +1025,7 @@ class Case(Strict):
     @property
     def hammer_plate(self) -> PlateHammer:
         """The hammer as a plate of its material's density (plate shapes only: see
-        :func:`perga.case.hammer_geometry.hammer_geometry` for any shape)."""
+        :func:`perga.model.hammer_geometry.hammer_geometry` for any shape)."""
         if not isinstance(self.hammers.shape, PlateShape):
             raise ValueError("hammers.shape: a plate is needed here (kind = 'plate')")
         return self.hammers.plate(self.materials[self.hammers.material].density)

@@ -10,12 +10,13 @@ from perga.cli.common import AddParser, problems
 
 def validate(args: argparse.Namespace) -> int:
     """Every problem of each case, or "ok"."""
-    from perga.case import CaseError, load_case
+    from perga.case import CaseError
+    from perga.model.compile import validated
 
     failed = 0
     for path in args.cases:
         try:
-            load_case(path)
+            validated(path)
         except CaseError as exc:
             failed += 1
             problems(exc.problems)
@@ -26,8 +27,9 @@ def validate(args: argparse.Namespace) -> int:
 
 def new(args: argparse.Namespace) -> int:
     """Write a template and check that it loads."""
-    from perga.case import CaseError, load_case
+    from perga.case import CaseError
     from perga.case.templates import TEMPLATES, write_template
+    from perga.model.compile import load_system
 
     if args.template not in TEMPLATES:
         names = ", ".join(f"{k} ({v[1]})" for k, v in TEMPLATES.items())
@@ -39,7 +41,7 @@ def new(args: argparse.Namespace) -> int:
     except OSError as exc:
         return problems([f"cannot write {args.output}: {exc.strerror or exc}"])
     try:
-        load_case(args.output)
+        load_system(args.output)
     except CaseError as exc:  # a template that does not load is perga's defect
         problems(exc.problems)
         return 1

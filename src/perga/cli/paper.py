@@ -16,11 +16,14 @@ from perga.progress import counted, progress_bar
 def paper_check(args: argparse.Namespace) -> int:
     """Every claim under the fitted and the realistic parameter sets."""
     from perga.case import load_case
+    from perga.model.compile import check_parameters
     from perga.studies.paper_check import Params, check_paper
     from perga.studies.paper_report import format_json, format_markdown, format_text, write_plots
 
     start = time.perf_counter()
     fitted, realistic = load_case(args.fitted), load_case(args.realistic)
+    for parameters in (fitted, realistic):
+        check_parameters(parameters)
     rows = check_paper(fitted, realistic)
     fit_p, real_p = Params.from_case(fitted), Params.from_case(realistic)
     if args.format == "json":

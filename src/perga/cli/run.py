@@ -22,9 +22,9 @@ def run(args: argparse.Namespace) -> int:
         request = Request(args.case, args.resume, args.output, args.overwrite,
                           tuple(args.set or ()), args.start_from)  # fmt: skip
         try:
-            case = load(request)
+            case, system = load(request)
             stop.check()
-            prepared = prepare(request, case)
+            prepared = prepare(request, case, system)
         except BadRequestError as exc:
             return problems([str(exc)])
     directory = prepared.directory

@@ -106,12 +106,12 @@ def window(args: argparse.Namespace) -> int:
 
 def calibrate(args: argparse.Namespace) -> int:
     """The fit, its intervals, best.toml and fit.json."""
-    from perga.case import load_case
+    from perga.model.compile import load_system
     from perga.studies.calibrate import calibrate as fit_keys
     from perga.studies.calibrate_report import write_plots
     from perga.studies.study_file import StudyError
 
-    load_case(args.case)  # the case itself first: its problems are a case file's
+    load_system(args.case)  # the case itself first: its problems are a case file's
     start = time.perf_counter()
     try:
         result = fit_keys(

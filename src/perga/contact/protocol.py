@@ -41,7 +41,7 @@ from perga.machine.compiled import CompiledMachine
 from perga.machine.effects import GranuleKinematics
 from perga.machine.machine import MachineState
 from perga.model.records import Impact, LedgerTerms, Release
-from perga.model.spec import GranuleSpec
+from perga.model.system import GranuleSpec
 
 FloatArray = NDArray[np.float64]
 

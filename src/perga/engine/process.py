@@ -31,7 +31,7 @@ import numpy as np
 from perga.geometry.clearance import Obstacles, clear_of
 from perga.model.process import DamageSpec, FeedSpec, OutletSpec
 from perga.model.records import Departure, Impact
-from perga.model.spec import GranuleSpec
+from perga.model.system import GranuleSpec
 
 if TYPE_CHECKING:
     from perga.engine.simulation import Simulation

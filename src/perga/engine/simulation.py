@@ -2,8 +2,8 @@
 (the granules and their contacts, :mod:`perga.contact`), stepped together.
 
 Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
-``SceneSpec.machine_dt``, the granules take ``contact_model.substeps`` steps of
-``SceneSpec.granule_dt`` inside it):
+``System.machine_dt``, the granules take ``contact_model.substeps`` steps of
+``System.granule_dt`` inside it):
 
 1. Kicks: only if the spec lists them, floor friction and air drag change all granules'
    velocities at once from (x_n, v_n) (:mod:`perga.machine.effects`): an operator split before
@@ -63,7 +63,7 @@ from perga.machine.energy import EnergyMeter
 from perga.machine.machine import Machine, build_machine
 from perga.model.frame import Frame, GranuleFrame, frozen
 from perga.model.records import EnergyLedger, Events, Impact
-from perga.model.spec import GranuleSpec, SceneSpec
+from perga.model.system import GranuleSpec, System
 
 FloatArray = NDArray[np.float64]
 
@@ -78,7 +78,7 @@ class Simulation:
     """
 
     def __init__(
-        self, spec: SceneSpec, *, record_impacts: bool = True, track_energy: bool = True
+        self, spec: System, *, record_impacts: bool = True, track_energy: bool = True
     ) -> None:
         self.spec = spec
         self.dt = spec.machine_dt

@@ -2,7 +2,7 @@
 when the spec lists it: an absent effect leaves no per-step hook, constraint or
 callback.
 
-Each effect is a class registered under its :class:`~perga.model.spec.EffectsSpec` field name.
+Each effect is a class registered under its :class:`~perga.model.system.EffectsSpec` field name.
 Effects that act on granule velocities (floor friction, air drag) are *kicks*: one compiled
 loop over all granules (numba), with no per-granule Python. Once per machine step, **before**
 the contact model moves anything (:meth:`~perga.engine.simulation.Simulation.step`), a
@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from perga.machine import units as u
 from perga.machine.chipmunk_state import JointImpulses, doubles_at
-from perga.model.spec import AirDragSpec, DriveSpec, FloorFrictionSpec
+from perga.model.system import AirDragSpec, DriveSpec, FloorFrictionSpec
 
 if TYPE_CHECKING:
     from perga.machine.machine import Machine

@@ -1,4 +1,4 @@
-"""SceneSpec -> Machine: the rotor, the hammers and their joints as Pymunk bodies, and the
+"""System -> Machine: the rotor, the hammers and their joints as Pymunk bodies, and the
 effects the spec lists. The only place the machine's Pymunk objects are made; the granules and
 the chamber wall belong to the contact model (:mod:`perga.contact`), which adds what it needs.
 
@@ -57,7 +57,7 @@ from perga.machine.chipmunk_state import (
 from perga.machine.effects import Effect, SwingStops, build_effects
 from perga.model.frame import MachineFrame, frozen
 from perga.model.records import HammerState
-from perga.model.spec import HammerSpec, SceneSpec, Vec2
+from perga.model.system import HammerSpec, System, Vec2
 
 HAMMER_GROUP = 1
 """Shape filter group of the hammers and the chamber wall: they never collide with each other."""
@@ -106,7 +106,7 @@ class Machine:
     (:mod:`perga.machine.effects`), in build order.
     """
 
-    spec: SceneSpec
+    spec: System
     space: pymunk.Space
     rotor: pymunk.Body
     hammer_bodies: list[pymunk.Body]
@@ -299,14 +299,14 @@ def _rotate(x: float, y: float, angle: float) -> tuple[float, float]:
     return (c * x - s * y, s * x + c * y)
 
 
-def build_machine(spec: SceneSpec) -> Machine:
+def build_machine(spec: System) -> Machine:
     """Build the Pymunk space of rotor and hammers for ``spec``, with its effects (module doc)."""
     space = pymunk.Space()
     space.iterations = spec.iterations
     space.gravity = u.vec_to_internal(spec.gravity, u.ACCELERATION)
     space.collision_slop = u.to_internal(u.COLLISION_SLOP, u.LENGTH)
 
-    omega = u.to_internal(spec.rotor.omega, u.ANGULAR_VELOCITY)
+    omega = u.to_internal(spec.rotor.angular_velocity, u.ANGULAR_VELOCITY)
     rotor = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     rotor.position = (0.0, 0.0)
     rotor.angular_velocity = omega

@@ -5,7 +5,7 @@ contact model or the output."""
 
 from perga.model.frame import Frame, GranuleFrame, MachineFrame
 from perga.model.records import EnergyLedger, HammerState, Impact, LedgerTerms
-from perga.model.spec import (
+from perga.model.system import (
     AirDragSpec,
     ChamberSpec,
     ContactSpec,
@@ -17,8 +17,8 @@ from perga.model.spec import (
     HammerSpec,
     RigidContactSpec,
     RotorSpec,
-    SceneSpec,
     SoftContactSpec,
+    System,
 )
 
 __all__ = [
@@ -40,6 +40,6 @@ __all__ = [
     "MachineFrame",
     "RigidContactSpec",
     "RotorSpec",
-    "SceneSpec",
     "SoftContactSpec",
+    "System",
 ]

@@ -2,8 +2,8 @@
 simulated time, phase-locked: frame k is taken at the first step whose end time reaches
 k·every (never "every since the last"), so a run's frames do not drift.
 
-Each recorder is built with the run directory and the system (:class:`~perga.model.spec.
-SceneSpec`); ``record(frame, events)`` appends a frame, ``events`` being everything the run has
+Each recorder is built with the run directory and the system (:class:`~perga.model.system.
+System`); ``record(frame, events)`` appends a frame, ``events`` being everything the run has
 recorded so far (:class:`~perga.model.records.Events`: impacts, releases, departures). A table
 recorder owns one CSV table.
 """
@@ -21,7 +21,7 @@ import numpy as np
 from perga.contact.laws import contact_law
 from perga.model.frame import Frame
 from perga.model.records import Departure, Events, Impact, Release
-from perga.model.spec import SceneSpec
+from perga.model.system import System
 from perga.output.tables import ParquetTable, Table, open_table
 from perga.output.vtk import VtkRecorder
 
@@ -93,7 +93,7 @@ class GranuleRecorder(TableRecorder):
 
     table: Table | ParquetTable
 
-    def __init__(self, directory: Path, spec: SceneSpec, table_format: str = "csv") -> None:
+    def __init__(self, directory: Path, spec: System, table_format: str = "csv") -> None:
         self.held = spec.has_bonds
         self.damage = spec.process.damage is not None
         columns = ["time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed", "radius"]
@@ -130,7 +130,7 @@ class HammerRecorder(TableRecorder):
 
     columns = ("time", "id", "swing_angle", "angular_velocity", "vx", "vy")
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+    def __init__(self, directory: Path, spec: System) -> None:
         self.table = Table(directory / "hammers.csv", self.columns)
 
     def record(self, frame: Frame, events: Events) -> None:
@@ -183,14 +183,14 @@ class EventRecorder(TableRecorder):
     record_type: type
     file: str
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+    def __init__(self, directory: Path, spec: System) -> None:
         self.omit = self.omitted(spec)
         self.names = record_fields(self.record_type, self.omit)
         self.table = Table(directory / self.file, record_columns(self.record_type, self.omit))
         self.written = 0
 
     @staticmethod
-    def omitted(spec: SceneSpec) -> frozenset[str]:
+    def omitted(spec: System) -> frozenset[str]:
         """Fields the scene does not give (none by default)."""
         return frozenset()
 
@@ -208,7 +208,7 @@ class ImpactRecorder(EventRecorder):
     kind, record_type, file = "impacts", Impact, "impacts.csv"
 
     @staticmethod
-    def omitted(spec: SceneSpec) -> frozenset[str]:
+    def omitted(spec: System) -> frozenset[str]:
         """The breakage columns, unless the scene has damage; the peak force, unless its
         contacts are soft, and the peak pressure, unless they are Hertz's."""
         omit = set() if spec.process.damage else set(DAMAGE_FIELDS)
@@ -253,7 +253,7 @@ class EnergyRecorder(TableRecorder):
         "closure",
     )
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+    def __init__(self, directory: Path, spec: System) -> None:
         self.table = Table(directory / "energy.csv", self.columns)
 
     def record(self, frame: Frame, events: Events) -> None:
@@ -281,7 +281,7 @@ RECORDERS: dict[str, type] = {
 
 
 def make_recorders(
-    names: Sequence[str], directory: Path, spec: SceneSpec, granule_table: str = "csv"
+    names: Sequence[str], directory: Path, spec: System, granule_table: str = "csv"
 ) -> list[Recorder]:
     """The recorders ``names`` (keys of :data:`RECORDERS`) for a run into ``directory``; the
     granule table in ``granule_table`` format ('csv' or 'parquet')."""

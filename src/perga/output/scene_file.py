@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from perga.model.spec import SceneSpec
+from perga.model.system import System
 
 FloatArray = NDArray[np.float64]
 NAME = "scene.json"
@@ -45,7 +45,7 @@ class SceneGeometry:
     granule_radii: FloatArray
 
 
-def write_scene(directory: Path, spec: SceneSpec) -> Path:
+def write_scene(directory: Path, spec: System) -> Path:
     """Write ``directory/scene.json`` for ``spec``; returns its path."""
     c = spec.chamber
     data = {

@@ -40,7 +40,7 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   impacts the file has no points (ParaView and pyvista read it; meshio 5.3 cannot read empty
   arrays).
 
-With ``output.vtk_3d`` (a :class:`~perga.model.spec.DrawingSpec` in the system) also
+With ``output.vtk_3d`` (a :class:`~perga.model.system.DrawingSpec` in the system) also
 ``hammers3d.pvd``, ``rotor3d.pvd`` and ``chamber3d.vtu``, and point data ``thickness`` (m) in
 the granule frames: see :mod:`perga.output.vtk3d`.
 
@@ -68,7 +68,7 @@ from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 from perga.geometry.polygon import outline_or_circle
 from perga.model.frame import Frame, MachineFrame
 from perga.model.records import Events, Impact
-from perga.model.spec import SceneSpec
+from perga.model.system import System
 from perga.output import paraview_state, vtk3d, vtk_grid
 from perga.output.files import reopen_at
 from perga.output.vtk_grid import POLY_LINE, POLYGON
@@ -182,7 +182,7 @@ class VtkRecorder:
     ``spec``: ``record(frame, events)`` a frame (``events``: everything so far), ``close()``
     the trajectories and impacts (idempotent)."""
 
-    def __init__(self, directory: Path, spec: SceneSpec) -> None:
+    def __init__(self, directory: Path, spec: System) -> None:
         self.directory = directory / "vtk"
         self.directory.mkdir(parents=True, exist_ok=True)
         self.spec = spec
@@ -380,7 +380,7 @@ class VtkRecorder:
         vtk_grid.save(vtk_grid.vertices(points, columns), self.directory / "impacts.vtu")
 
 
-def hammer_cell_data(spec: SceneSpec, machine: MachineFrame) -> dict[str, NDArray]:
+def hammer_cell_data(spec: System, machine: MachineFrame) -> dict[str, NDArray]:
     """Per hammer, the cell data of ``hammers.pvd`` (module doc)."""
     alpha = np.asarray(machine.swing_angles)
     mounts = np.array([h.angle_on_rotor for h in spec.hammers], dtype=float)

@@ -1,6 +1,6 @@
 """The 3-D view of a run (case option ``output.vtk_3d``): the machine as closed triangle meshes,
 so that a ParaView scene looks like the machine. Written by :class:`perga.output.vtk.VtkRecorder`
-when the system carries a :class:`~perga.model.spec.DrawingSpec` (the parts' thicknesses;
+when the system carries a :class:`~perga.model.system.DrawingSpec` (the parts' thicknesses;
 the recorders see the system and its frames only, so the case's sizes travel in the system).
 
 Files in ``RUN/vtk/`` (SI units), beside the 2-D ones of :mod:`perga.output.vtk`:

@@ -1,14 +1,14 @@
 """``perga run``: a case file through the simulation into a run directory.
 
-Path of a case: ``load_case`` (validation) -> ``scene_spec`` (the system) -> ``Simulation``
-stepped at its machine step. Each writer has its own phase-locked clock (its trigger: tables at
-``output.every``, ParaView at ``output.vtk_every``); the simulation advances to the next step
-at which a writer, a progress report or a checkpoint is due, and its frame then goes to the
-writers due (every writer gets the first frame and the last). The run directory holds the case
-file as run, ``scene.json`` (the system's geometry), one table per recorder (flushed as
-written), and ``summary.json``, which is written whatever happens: completed (or completed with
-its energy ledger off), interrupted (a stop signal) or failed (NaN, a granule that left the
-chamber, an error), with the reason.
+Path of a case: ``load_case`` (its schema and names) -> ``compile_case`` (the system, checked)
+-> ``Simulation`` stepped at its machine step. Each writer has its own phase-locked clock (its
+trigger: tables at ``output.every``, ParaView at ``output.vtk_every``); the simulation advances
+to the next step at which a writer, a progress report or a checkpoint is due, and its frame
+then goes to the writers due (every writer gets the first frame and the last). The run
+directory holds the case file as run, ``scene.json`` (the system's geometry), one table per
+recorder (flushed as written), and ``summary.json``, which is written whatever happens:
+completed (or completed with its energy ledger off), interrupted (a stop signal) or failed
+(NaN, a granule that left the chamber, an error), with the reason.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from perga.case.schema import Case
-from perga.case.timestep import contact_plan
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case, load_system
+from perga.model.system import System
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
 from perga.run import checkpoints
@@ -55,11 +55,11 @@ class Writer:
     contacts: bool
 
 
-def writers(case: Case, directory: Path, spec) -> list[Writer]:
+def writers(case: Case, directory: Path, system: System) -> list[Writer]:
     """The recorders ``output.record`` lists, each with its trigger: ParaView's every
     ``output.vtk_every`` (default ``output.every``), the tables every ``output.every``."""
     out = case.output
-    recorders = make_recorders(out.record, directory, spec, out.granule_table)
+    recorders = make_recorders(out.record, directory, system, out.granule_table)
     vtk_every = out.vtk_every if out.vtk_every is not None else out.every
     return [
         Writer(recorder, PhaseLock(vtk_every if name == "vtk" else out.every), name == "vtk")
@@ -78,12 +78,10 @@ def simulate(
     into ``directory``, as ``perga run CASE -o DIRECTORY`` does; returns the summary (also in
     summary.json). CaseError for a bad case; FileExistsError for a directory that holds a
     run, unless ``overwrite``."""
-    from perga.case import load_case
-
     path, directory = Path(case), Path(directory)
-    loaded = load_case(path, overrides=list(overrides))
+    loaded, system = load_system(path, overrides=overrides)
     prepare_directory(directory, overwrite)
-    return run_case(loaded, path, directory)
+    return run_case(loaded, path, directory, system=system)
 
 
 def run_case(
@@ -92,9 +90,11 @@ def run_case(
     directory: Path,
     progress: Progress | None = None,
     started_from: str = "",
+    system: System | None = None,
 ) -> RunSummary:
-    """Simulate ``case`` into ``directory`` (prepared by the caller); returns the summary, which
-    is also written to summary.json. A stop signal (:mod:`perga.stopping`; deferred to the end of
+    """Simulate ``case`` (its ``system``, compiled by the caller, or here: CaseError) into
+    ``directory`` (prepared by the caller); returns the summary, which is also written to
+    summary.json. A stop signal (:mod:`perga.stopping`; deferred to the end of
     the build or the next step boundary) and RunStoppedError are recorded in the summary and
     re-raised after everything written so far is flushed; a stop signal also leaves a
     checkpoint to resume from (:func:`resume_run`). ``started_from``: where the granules
@@ -109,7 +109,8 @@ def run_case(
     with StopRequest() as stop:
         try:
             with _ending(summary):
-                run = _build(case, case_path, directory, summary, stop)
+                run = _build(case, system or compile_case(case), case_path, directory, summary,
+                             stop)  # fmt: skip
                 run.write_frame(summary, run.writers)
                 if run.grid is not None:  # from now on a stopped run can be resumed
                     run.checkpoint(summary, start, write=True)
@@ -120,27 +121,30 @@ def run_case(
 
 
 def _build(
-    case: Case, case_path: Path, directory: Path, summary: RunSummary, stop: StopRequest
+    case: Case,
+    system: System,
+    case_path: Path,
+    directory: Path,
+    summary: RunSummary,
+    stop: StopRequest,
 ) -> _Run:
     """The case's copy, its simulation, scene.json and writers: a run ready for frame 0."""
     write_case_copy(case, case_path, directory / "case.toml")
-    spec = scene_spec(case)
     record = case.output.record
     options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
-    sim = Simulation(spec, **options)
+    sim = Simulation(system, **options)
     summary.dt, summary.granules, summary.hammers = (
-        spec.granule_dt,
-        len(spec.granules),
-        len(spec.hammers),
+        system.granule_dt,
+        len(system.granules),
+        len(system.hammers),
     )
-    assert spec.plan is not None
-    summary.time_step = asdict(spec.plan) | {"contact_model": spec.contact_model.kind}
-    if case.contact_model.soft:
-        summary.contacts = [asdict(p) for p in contact_plan(case, spec.granule_dt)]
+    assert system.plan is not None
+    summary.time_step = asdict(system.plan) | {"contact_model": system.contact_model.kind}
+    summary.contacts = [asdict(p) for p in system.pairs]
     stop.check()
-    write_scene(directory, spec)
+    write_scene(directory, system)
     n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-    return _Run(case, directory, sim, writers(case, directory, spec), n_steps)
+    return _Run(case, directory, sim, writers(case, directory, system), n_steps)
 
 
 def resume_run(case: Case, directory: Path, progress: Progress | None = None) -> RunSummary:
@@ -203,7 +207,7 @@ class _Run:
         """When the last checkpoint file was written (time.perf_counter), s."""
         self.case_digest = case_digest(directory)
         self.ledger_tolerance = case.solver.ledger_tolerance
-        self.remedy = smaller_steps(case)
+        self.remedy = smaller_steps(sim.spec)
 
     def write_frame(self, summary: RunSummary, due: list[Writer]) -> None:
         """The simulation's frame, checked, to the writers ``due``."""

@@ -10,6 +10,8 @@ from pathlib import Path
 
 from perga.case import load_case
 from perga.case.schema import Case
+from perga.model.compile import check_parameters, compile_case
+from perga.model.system import System
 from perga.run.checkpoints import CheckpointError
 from perga.run.directory import prepare_directory
 from perga.run.loop import Progress, resume_run, run_case
@@ -37,10 +39,12 @@ class Request:
 
 @dataclass(frozen=True)
 class Prepared:
-    """A request ready to run: its case and directory (``resume``: go on with the run there)."""
+    """A request ready to run: its case, its system (None to go on with a stopped run, whose
+    checkpoint holds the simulation) and its directory."""
 
     request: Request
     case: Case
+    system: System | None
     directory: Path
 
     @property
@@ -49,8 +53,9 @@ class Prepared:
         return self.request.resume is not None
 
 
-def load(request: Request) -> Case:
-    """The request's case, checked (BadRequestError; CaseError for a bad case file)."""
+def load(request: Request) -> tuple[Case, System | None]:
+    """The request's case and its system, compiled and checked (BadRequestError; CaseError for a
+    bad case file); a stopped run's case, whose system its checkpoint holds (None)."""
     r = request
     if (r.case is None) == (r.resume is None):
         raise BadRequestError("perga run needs a CASE or --resume RUN (one of them)")
@@ -61,31 +66,34 @@ def load(request: Request) -> Case:
             )
         if not (r.resume / "case.toml").is_file():
             raise BadRequestError(f"{r.resume} is not a perga run (it has no case.toml)")
-        return load_case(r.resume / "case.toml")
+        return load_case(r.resume / "case.toml"), None
     assert r.case is not None
     if r.start_from is not None:
         try:
-            return case_from_run(r.case, list(r.overrides), r.start_from)
+            case = case_from_run(r.case, list(r.overrides), r.start_from)
         except RunStateError as exc:
             raise BadRequestError(str(exc)) from None
-    return load_case(r.case, overrides=r.overrides)
-
-
-def prepare(request: Request, case: Case) -> Prepared:
-    """The run directory of ``request`` made ready for ``case`` (:func:`load`'s):
-    BadRequestError for a parameter set, a run with nothing to resume, or a directory that
-    holds a run (without ``overwrite``) or cannot be made."""
+    else:
+        case = load_case(r.case, overrides=r.overrides)
     if case.chamber is None:  # a parameter set (for paper-check), not a scene
+        check_parameters(case)
         raise BadRequestError(
-            f"{request.case}: [chamber] is missing: perga run needs the wall around the rotor "
+            f"{r.case}: [chamber] is missing: perga run needs the wall around the rotor "
             "(a case without one is a parameter set for perga paper-check)"
         )
+    return case, compile_case(case)
+
+
+def prepare(request: Request, case: Case, system: System | None) -> Prepared:
+    """The run directory of ``request`` made ready for ``case`` and ``system`` (:func:`load`'s):
+    BadRequestError for a run with nothing to resume, or a directory that holds a run (without
+    ``overwrite``) or cannot be made."""
     if request.resume is not None:
         try:
             check_resumable(request.resume)
         except CheckpointError as exc:
             raise BadRequestError(f"cannot resume: {exc}") from None
-        return Prepared(request, case, request.resume)
+        return Prepared(request, case, None, request.resume)
     assert request.case is not None
     directory = request.output or Path(case.output.directory.format(case=request.case.stem))
     try:
@@ -97,7 +105,7 @@ def prepare(request: Request, case: Case) -> Prepared:
             f"cannot make the run directory {directory}: {exc.strerror or exc}; choose another "
             "-o DIR"
         ) from None
-    return Prepared(request, case, directory)
+    return Prepared(request, case, system, directory)
 
 
 def execute(prepared: Prepared, progress: Progress | None = None) -> RunSummary:
@@ -112,7 +120,12 @@ def execute(prepared: Prepared, progress: Progress | None = None) -> RunSummary:
     request = prepared.request
     assert request.case is not None
     return run_case(
-        prepared.case, request.case, prepared.directory, progress, request.start_from or ""
+        prepared.case,
+        request.case,
+        prepared.directory,
+        progress,
+        request.start_from or "",
+        system=prepared.system,
     )
 
 

@@ -13,8 +13,8 @@ from pydantic import ValidationError
 from perga.case import CaseError, load_case
 from perga.case.load import overridden, read_case_data
 from perga.case.schema import Case
-from perga.case.sizes import initial_radii
 from perga.geometry.clearance import overlapping_pairs
+from perga.model.sizes import initial_radii
 from perga.output.tables import read_columns, table_path
 from perga.run import checkpoints
 from perga.run.summary import FINISHED

@@ -9,9 +9,8 @@ import math
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from perga.case.schema import Case
 from perga.model.frame import Frame
-from perga.model.spec import SceneSpec
+from perga.model.system import System
 
 COMPLETED = "completed"
 LEDGER_OFF = "completed, ledger off"
@@ -37,7 +36,7 @@ class RunSummary:
     contacts: list[dict[str, object]] = field(default_factory=list)
     """Soft contacts: per contact kind its materials, stiffness, damping and the convention
     that gives it from e, duration and steps per contact, k_t/k_n, and the tangential
-    half-period of a sticking contact with its steps (:class:`perga.case.timestep.PairPlan`)."""
+    half-period of a sticking contact with its steps (:class:`perga.model.plan.PairPlan`)."""
     simulated_time: float = 0.0
     wall_time: float = 0.0
     steps_per_second: float = 0.0
@@ -60,7 +59,7 @@ class RunSummary:
     warnings: list[str] = field(default_factory=list)
 
 
-def describe_end(summary: RunSummary, frame: Frame, system: SceneSpec, threads: int) -> None:
+def describe_end(summary: RunSummary, frame: Frame, system: System, threads: int) -> None:
     """The summary's steps, times, counts, speeds, threads and population from the frame at
     the end of the run and the ``system`` it ran."""
     summary.steps, summary.simulated_time = frame.step, frame.time
@@ -88,12 +87,12 @@ def describe_end(summary: RunSummary, frame: Frame, system: SceneSpec, threads: 
         }
 
 
-def smaller_steps(case: Case) -> str:
-    """How to take smaller steps in ``case``: the remedy for a ledger that does not close."""
-    model = case.contact_model
-    if not model.soft:
+def smaller_steps(system: System) -> str:
+    """How to take smaller steps in ``system``: the remedy for a ledger that does not close."""
+    model = system.contact_model
+    if model.kind == "rigid":
         return "take smaller steps (solver.dt, or solver.substeps)"
-    if model.granule_substeps > 1:
+    if model.substeps > 1:
         return (
             "take smaller machine steps (contact_model.granule_substeps = 1: the hammers keep "
             "their velocity through the granules' substeps, and that split's error grows with "

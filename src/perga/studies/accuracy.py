@@ -2,7 +2,7 @@
 
 For each scene of :mod:`perga.studies.accuracy_scenes` and each :class:`Setting` of the grid
 (rigid: time step × solver iterations; linear and Hertz soft contacts: steps per contact ×
-granule substeps) one run through the case path (``Case`` -> ``scene_spec`` -> ``Simulation``,
+granule substeps) one run through the case path (``Case`` -> ``compile_case`` -> ``Simulation``,
 impact log and energy meter on, as ``perga run`` records them) gives:
 
 * the error against the scene's reference (:data:`REFERENCES`), deterministic;
@@ -28,7 +28,7 @@ import numpy as np
 from perga.analytic.common import STANDARD_GRAVITY
 from perga.case import Case, CaseError
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.system import System
 from perga.studies.accuracy_scenes import (
     BOUNCE,
     BounceReference,
@@ -118,9 +118,9 @@ class Stepper:
         self.wall += time.perf_counter() - start
 
 
-def simulation(case: Case) -> Simulation:
+def simulation(system: System) -> Simulation:
     """The rigid or soft simulation of a case, impact log and energy meter on."""
-    return Simulation(scene_spec(case))
+    return Simulation(system)
 
 
 def _run_to(stepper: Stepper, duration: float) -> None:
@@ -132,11 +132,11 @@ def _finish(stepper: Stepper, errors: dict[str, float]) -> Measured:
     return Measured(errors, stepper.wall, sim.time, sim.steps)
 
 
-def measure_restitution(case: Case, duration: float) -> Measured:
+def measure_restitution(case: Case, system: System, duration: float) -> Measured:
     """e = −(rebound normal speed)/(approach normal speed) relative to the face's material point
     (it turns at the schema's smallest ω: 5e-8 m/s, which would show as 6e-8 in e), read at the
     end of the run, when the granule flies free again; the face's normal is +y."""
-    stepper = Stepper(simulation(case))
+    stepper = Stepper(simulation(system))
     (v_in,) = np.array(case.granules.placement.velocities, dtype=float)
     _run_to(stepper, duration)
     granules = stepper.sim.frame(contacts=False).granules
@@ -158,12 +158,12 @@ def _along_blade(sim: Simulation, omega: float) -> tuple[float, float]:
     return float(p @ ex), float(v_rel @ ex)
 
 
-def measure_blade(case: Case, duration: float) -> Measured:
+def measure_blade(case: Case, system: System, duration: float) -> Measured:
     """Exit speed relative to the blade at the tip, interpolated linearly between the two steps
     around the crossing."""
     omega = case.rotor.angular_velocity
     tip = case.hammers.hinge_radius + case.hammers.shape.length
-    stepper = Stepper(simulation(case))
+    stepper = Stepper(simulation(system))
     sim = stepper.sim
     x0, v0 = _along_blade(sim, omega)
     _, v_exact = blade_exit_reference()
@@ -177,10 +177,10 @@ def measure_blade(case: Case, duration: float) -> Measured:
     return _finish(stepper, {"blade": math.nan})
 
 
-def measure_hinged(case: Case, duration: float) -> Measured:
+def measure_hinged(case: Case, system: System, duration: float) -> Measured:
     """Granule velocity at the end (free flight after the impact) against the instantaneous
     impact, and the ledger's closure over the run."""
-    stepper = Stepper(simulation(case))
+    stepper = Stepper(simulation(system))
     _run_to(stepper, duration)
     sim = stepper.sim
     exact = hinged_reference(case)
@@ -201,10 +201,10 @@ def _bounce_reference(case: Case, duration: float) -> BounceReference:
     return _BOUNCE_REFERENCES[key]
 
 
-def measure_bounce(case: Case, duration: float) -> Measured:
+def measure_bounce(case: Case, system: System, duration: float) -> Measured:
     """Largest height error over the run (every step) relative to the drop height."""
     reference = _bounce_reference(case, duration)
-    stepper = Stepper(simulation(case))
+    stepper = Stepper(simulation(system))
     sim = stepper.sim
     worst = 0.0
     for _ in range(math.ceil(duration / sim.dt - 1e-9)):
@@ -219,7 +219,7 @@ class Study:
     """A scene, how to measure it, and its settings grid."""
 
     scene: Scene
-    measure: Callable[[Case, float], Measured]
+    measure: Callable[[Case, System, float], Measured]
     settings: tuple[Setting, ...]
 
 
@@ -303,7 +303,7 @@ def _rows(
     references = measured.errors if measured else _references_of(study)
     spec_dt = machine = t_c = math.nan
     if case is not None:
-        from perga.case.timestep import step_plan
+        from perga.model.plan import step_plan
 
         plan = step_plan(case)
         spec_dt, machine, t_c = plan.granule, plan.machine, plan.contact_duration
@@ -341,14 +341,14 @@ def run_setting(study: Study, setting: Setting, repeats: int = 3) -> list[Row]:
     """Run one setting (repeated while cheap, median wall time); rows for each reference. A
     setting the case checks refuse, or a run that fails, gives rows with its status."""
     try:
-        case = study.scene.case(setting)
+        case, system = study.scene.case(setting)
     except CaseError as exc:
         return _rows(study, setting, None, None, "refused: " + "; ".join(exc.problems))
     try:
-        first = study.measure(case, study.scene.duration)
+        first = study.measure(case, system, study.scene.duration)
         walls = [first.wall]
         while len(walls) < repeats and first.wall < CHEAP:
-            again = study.measure(case, study.scene.duration)
+            again = study.measure(case, system, study.scene.duration)
             if again.errors != first.errors:  # the engines are deterministic
                 raise RuntimeError(f"not deterministic: {first.errors} then {again.errors}")
             walls.append(again.wall)
@@ -364,7 +364,7 @@ def warm_up() -> None:
     for model in ("linear", "hertz"):
         for k in (1, 10):
             setting = Setting(model, steps_per_contact=10, granule_substeps=k)  # type: ignore[arg-type]
-            measure_restitution(scene.case(setting), scene.duration)
+            measure_restitution(*scene.case(setting), scene.duration)
 
 
 @dataclass

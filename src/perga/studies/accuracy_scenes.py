@@ -39,9 +39,10 @@ from perga.analytic.contact import HERTZ_DURATION_COEFFICIENT
 from perga.analytic.impact import hinged_impact
 from perga.analytic.sliding import frictionless_exit
 from perga.case import Case, CaseError
-from perga.case.checks import check_case
-from perga.case.timestep import pair_stiffness
 from perga.contact.laws import contact_law
+from perga.model.compile import compile_case
+from perga.model.plan import pair_stiffness
+from perga.model.system import System
 
 Model = Literal["rigid", "linear", "hertz"]
 
@@ -123,9 +124,10 @@ class Scene:
     hertz_speed: float
     duration: float
 
-    def case(self, setting: Setting) -> Case:
-        """The validated case of this scene under ``setting`` (CaseError if the cross-checks
-        refuse it, e.g. a rigid step that lets the granule tunnel)."""
+    def case(self, setting: Setting) -> tuple[Case, System]:
+        """The validated case of this scene under ``setting`` and its system (CaseError, each
+        problem naming the scene, if the cross-checks refuse it, e.g. a rigid step that lets the
+        granule tunnel)."""
         data = copy.deepcopy(self.data)
         solver: dict[str, Any] = {"duration": self.duration, "iterations": setting.iterations}
         if setting.model == "rigid":
@@ -144,10 +146,10 @@ class Scene:
                 contact["stiffness"] = hertz_stiffness_for(t_c, self.hertz_speed)
         data["solver"], data["contact_model"] = solver, contact
         case = Case.model_validate(data)
-        problems = check_case(case)
-        if problems:
-            raise CaseError([f"{self.name}: {p}" for p in problems])
-        return case
+        try:
+            return case, compile_case(case)
+        except CaseError as exc:
+            raise CaseError([f"{self.name}: {p}" for p in exc.problems]) from None
 
 
 # --- restitution on a flat face -----------------------------------------------------------

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from perga import __version__
-from perga.case.load import load_case, overridden, read_case_data
+from perga.case.load import overridden, read_case_data
 
 ROW = "row.json"
 """A finished run's row, in its directory."""
@@ -123,6 +123,7 @@ def run_job(job: Job) -> dict[str, Any]:
     directory (``row.json``) once the run has ended, whatever ended it."""
     import numba
 
+    from perga.model.compile import load_system
     from perga.run import prepare_directory, run_case
     from perga.stats.metrics import MetricUnavailableError, evaluate
     from perga.stats.tables import load_run
@@ -132,9 +133,9 @@ def run_job(job: Job) -> dict[str, Any]:
     directory = Path(job.directory)
     row = failed_row(job, "")
     try:
-        case = load_case(job.case, overrides=job.overrides)
+        case, system = load_system(job.case, overrides=job.overrides)
         prepare_directory(directory, overwrite=True)
-        summary = run_case(case, Path(job.case), directory)
+        summary = run_case(case, Path(job.case), directory, system=system)
         run = load_run(directory)
         notes = {}
         for name in job.metrics:

@@ -32,6 +32,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from perga.case import CaseError
 from perga.case.load import overridden, read_case_data, validate_case
 from perga.case.overrides import parse_value
+from perga.model.compile import check
 from perga.stats.metrics import METRICS, parse_metric
 
 
@@ -115,7 +116,8 @@ def check_keys(case_path: Path, keys: dict[str, object], where: str) -> list[str
     file, so an unknown key or a value out of range is named as the case file would name it."""
     try:
         data = read_case_data(case_path)
-        validate_case(overridden(data, [f"{k}={v}" for k, v in keys.items()], case_path), case_path)
+        check(validate_case(overridden(data, [f"{k}={v}" for k, v in keys.items()], case_path),
+                            case_path))  # fmt: skip
     except CaseError as exc:
         return [f"{where}: {p}" for p in exc.problems]
     return []

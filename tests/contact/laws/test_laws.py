@@ -159,7 +159,7 @@ def test_the_laws_load_without_the_kernel() -> None:
         "import sys; from perga.contact.laws import LAWS, contact_law;"
         "[contact_law(n) for n in LAWS]; loaded = lambda: sorted("
         "m for m in ('perga.contact.soft', 'numba') if m in sys.modules); print(loaded());"
-        "import perga.case.timestep, perga.model.from_case; print(loaded())"
+        "import perga.model.plan, perga.model.compile; print(loaded())"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True

@@ -13,11 +13,12 @@ import math
 import pytest
 
 from perga.analytic.contact import damping_ratio, restitution
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.case.reference import json_schema, markdown_reference
-from perga.case.timestep import contact_plan, contact_steps, step_plan, steps_for_damping
 from perga.contact.laws import LAWS
 from perga.model import SoftContactSpec
+from perga.model.compile import validated
+from perga.model.plan import contact_plan, contact_steps, step_plan, steps_for_damping
 from tests.test_soft_run import SOFT, soft_run
 from tests.test_soft_run import restitution as measured
 
@@ -57,9 +58,9 @@ def test_the_new_law_reaches_the_restitutions_it_says(tmp_path, toy) -> None:
     path = tmp_path / "case.toml"
     path.write_text(text)
     with pytest.raises(CaseError, match="out of reach of a linear contact"):
-        load_case(path)
+        validated(path)
     path.write_text(text.replace('kind = "linear"', 'kind = "toy"'))
-    case = load_case(path)
+    case = validated(path)
     (hammer, *_) = contact_plan(case, step_plan(case).granule)
     zeta = damping_ratio(0.1, "overlap")
     assert hammer.damping == zeta < 1.0

@@ -10,7 +10,7 @@ from tests.engine.helpers import plate
 
 from perga.contact.rigid.bodies import factor_pair_table
 from perga.engine import Simulation
-from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, GranuleSpec, RotorSpec, System
 
 ULP4 = 4 * 2.2e-16  # the factorisation promises the pair value to 4 ulp (two roundings + slack)
 
@@ -74,7 +74,7 @@ def test_unsplit_pair_still_gets_its_exact_restitution():
         mount="welded",
         material="steel",
     )
-    spec = SceneSpec(
+    spec = System(
         RotorSpec(1e-6, 0.05),
         (hammer,),
         granules,

@@ -7,7 +7,7 @@ from tests.engine.helpers import plate
 
 from perga.engine import Simulation
 from perga.machine import units
-from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, GranuleSpec, RotorSpec, System
 
 R_G = 0.002
 
@@ -81,8 +81,8 @@ def test_batch_contact_term_equals_per_contact_callbacks(mount: str, first: str)
         ContactSpec("b", "b", restitution=0.3, friction=0.2),
         ContactSpec("a", "b", restitution=0.7, friction=0.35),
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=100.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=100.0, radius=0.2),
         hammers=(hammer,),
         granules=granules,
         contacts=contacts,

@@ -11,7 +11,7 @@ from tests.engine.helpers import plate, rectangle
 from perga.analytic.impact import hinged_impact, normal_impact
 from perga.engine import Simulation
 from perga.machine import units
-from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, SceneSpec
+from perga.model import ContactSpec, GranuleSpec, HammerSpec, RotorSpec, System
 
 # A single rigid impact is one impulse solve: Chipmunk's restitution target is exact, so the
 # result is exact up to rounding (~1e-15, design §5). 1e-6 leaves room for iteration counts
@@ -34,8 +34,8 @@ def test_free_two_body_impact(m: float, M: float, e: float) -> None:
         position=(length / 2, width / 2 + r + 1e-4), velocity=(0.0, 0.0),
         radius=r, mass=m, material="beebread",
     )  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("beebread", "steel", restitution=e, friction=0.3),),
@@ -80,8 +80,8 @@ def test_restitution_is_the_pairs_not_the_product() -> None:
         ContactSpec("steel", "beebread", restitution=0.55, friction=0.4),
         ContactSpec("wax", "steel", restitution=0.8, friction=0.1),
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(wall,),
         granules=granules,
         contacts=contacts,
@@ -113,8 +113,8 @@ def test_hinged_hammer_on_kinematic_rotor() -> None:
     granule = GranuleSpec(
         position=(R + a, 0.01 + r + 1e-4), velocity=(0.0, 0.0), radius=r, mass=m, material="bb"
     )
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=omega, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=omega, radius=0.2),
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=e, friction=0.0),),
@@ -165,8 +165,8 @@ def _corner_hit(outline) -> Simulation:
         position=tuple(away * (r + 1e-4)), velocity=tuple(-3.0 * away), radius=r, mass=m,
         material="bb",
     )  # fmt: skip
-    spec = SceneSpec(
-        rotor=RotorSpec(omega=0.0, radius=0.2),
+    spec = System(
+        rotor=RotorSpec(angular_velocity=0.0, radius=0.2),
         hammers=(hammer,),
         granules=(granule,),
         contacts=(ContactSpec("bb", "steel", restitution=0.7, friction=0.0),),
@@ -204,11 +204,11 @@ def test_a_sliding_points_impact_is_taken_at_one_point() -> None:
     centre in pre_solve; taken before the move (at its begin) the row mixed the surface point
     and the centre: 3.9e-3 off."""
     from perga.case import load_case
-    from perga.model.from_case import scene_spec
+    from perga.model.compile import compile_case
 
     sets = ["granules.rolls=false", 'hammers.mount="welded"', "solver.duration=0.05"]
     case = load_case(Path(__file__).parents[3] / "cases" / "single-granule.toml", overrides=sets)
-    sim = Simulation(scene_spec(case))
+    sim = Simulation(compile_case(case))
     sim.run(0.05)
     (impact,) = sim.impacts
     m = case.granule_mass

@@ -13,7 +13,7 @@ from perga.case import load_case
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
 from perga.contact.soft.granules import looks_for_coasting, pace_coasting
 from perga.engine import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 from .helpers import MASS, RADIUS, chamber_gas
 
@@ -107,7 +107,7 @@ def test_the_soft_separator_coasts_to_the_same_frames() -> None:
     """The bundled soft separator (300 granules, hammers as polygons, the chamber wall, floor
     friction and hinge friction), 600 machine steps from rest."""
     case = load_case(ROOT / "cases/soft-separator.toml", ["solver.threads=1"])
-    on, off = (Simulation(scene_spec(case), track_energy=True) for _ in range(2))
+    on, off = (Simulation(compile_case(case), track_energy=True) for _ in range(2))
     off.contacts.granules.coasting = False
     for _ in range(600):
         on.step()

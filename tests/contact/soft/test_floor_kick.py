@@ -11,14 +11,14 @@ from perga.case import load_case
 from perga.contact.soft.model import _Kinematics
 from perga.engine.simulation import Simulation
 from perga.machine.effects import AirDrag, FloorFriction
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASE = Path(__file__).resolve().parents[3] / "cases/soft-separator.toml"
 
 
 def _twins(monkeypatch, *overrides: str) -> tuple[Simulation, Simulation]:
     """The soft separator built twice: as it is, and with the runner keeping every kick."""
-    spec = scene_spec(load_case(CASE, overrides=["solver.threads=1", *overrides]))
+    spec = compile_case(load_case(CASE, overrides=["solver.threads=1", *overrides]))
     taken = Simulation(spec)
     with monkeypatch.context() as patch:
         patch.setattr(_Kinematics, "take_floor_kick", lambda self, kick: False)

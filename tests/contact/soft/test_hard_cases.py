@@ -30,7 +30,6 @@ from perga.analytic.contact import (
     time_step,
     tunnelling_time_step,
 )
-from perga.case.timestep import steps_for_damping
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, plane, uniform_table
 from perga.contact.soft.polygon_set import (
     FREE,
@@ -40,6 +39,7 @@ from perga.contact.soft.polygon_set import (
     contact_table,
     polygon_set,
 )
+from perga.model.plan import steps_for_damping
 
 from .helpers import chamber_gas, impact
 

@@ -10,7 +10,7 @@ import pytest
 
 from perga.case import load_case
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASE = Path(__file__).resolve().parents[2] / "cases/closed-form/oblique-impact-slide.toml"
 OMEGA = 1e-6
@@ -38,7 +38,7 @@ def test_a_soft_impact_record_is_the_granules_motion() -> None:
         CASE,
         overrides=["contact_model.kind=linear", "contact_model.duration=1e-4", "solver.dt=2e-6"],
     )
-    sim = Simulation(scene_spec(case))
+    sim = Simulation(compile_case(case))
     sim.run(1e-3)
     (impact,) = sim.impacts
     granules = sim.frame().granules

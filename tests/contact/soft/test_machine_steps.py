@@ -11,7 +11,7 @@ import pytest
 from perga.case import load_case
 from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 CASES = Path(__file__).resolve().parents[3] / "cases"
 SWEPT = ("granules.placement.inner_radius=0.09", "granules.placement.outer_radius=0.12")
@@ -22,7 +22,7 @@ GRANULE_COUNTS = ("steps", "time", "n_rebuilds", "n_candidate_lists", "coasted")
 
 
 def _twins(case: Path, *overrides: str, **options) -> tuple[Simulation, Simulation]:
-    spec = scene_spec(load_case(case, overrides=["solver.threads=1", *overrides]))
+    spec = compile_case(load_case(case, overrides=["solver.threads=1", *overrides]))
     return Simulation(spec, **options), Simulation(spec, **options)
 
 
@@ -163,7 +163,7 @@ def test_whole_steps_release_granules_and_break_them_as_steps_do(tmp_path, actio
 def test_steps_that_need_python_are_taken_one_at_a_time(case, overrides) -> None:
     """Where a step needs Python (the runner's kicks, the process's feed and outlet, pair forces
     on threads, the rigid model's collision handlers), advance takes one step a call."""
-    spec = scene_spec(load_case(CASES / case, overrides=list(overrides)))
+    spec = compile_case(load_case(CASES / case, overrides=list(overrides)))
     sim = Simulation(spec)
     with sim.contacts.running():
         assert [sim.advance(50) for _ in range(5)] == [1] * 5

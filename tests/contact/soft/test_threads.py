@@ -17,7 +17,7 @@ from perga.cli import main
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, uniform_table
 from perga.contact.soft import threads as t
 from perga.engine import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -95,7 +95,7 @@ def test_a_run_follows_the_free_cores(monkeypatch, request):
     numba.set_num_threads(2)
     request.addfinalizer(lambda: numba.set_num_threads(held))
     fake_cores(monkeypatch, 1, 1, 2, 2, 1, 4)
-    spec = scene_spec(load_case(ROOT / "cases" / "soft-separator.toml"))
+    spec = compile_case(load_case(ROOT / "cases" / "soft-separator.toml"))
     spec = replace(spec, contact_model=replace(spec.contact_model, threads=2))
     sim = Simulation(spec)
     used = [sim.contacts.granules.threads]

@@ -3,7 +3,7 @@ of every shape and the collision handlers, added to a machine's space.
 
 * Granules: dynamic bodies with one ``Circle`` each; moment m r²/2 or ``inf`` (sliding point).
 * Chamber: one convex quadrilateral per edge of the wall's inner outline on the space's static
-  body, ``wall_thickness`` thick (:meth:`perga.model.spec.ChamberSpec.pieces`). A round wall's
+  body, ``wall_thickness`` thick (:meth:`perga.model.system.ChamberSpec.pieces`). A round wall's
   inner outline is the polygon of ``segments`` sides circumscribing the circle (at most
   R(1/cos(π/N) − 1) outside it); a chamber from a file has its own outline. The wall shares the
   hammers' filter group.
@@ -31,7 +31,7 @@ import pymunk
 
 from perga.machine import units as u
 from perga.machine.machine import HAMMER_GROUP, Machine
-from perga.model.spec import GranuleSpec
+from perga.model.system import GranuleSpec
 
 Kind = Literal["granule", "hammer", "wall"]
 Phase = Literal["begin", "pre_solve", "post_solve", "separate"]

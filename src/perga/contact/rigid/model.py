@@ -41,7 +41,7 @@ from perga.machine.batch import BodyReader, BodyWriter
 from perga.machine.effects import FloorKick
 from perga.machine.machine import Machine, MachineState
 from perga.model.records import Impact, LedgerTerms, Release
-from perga.model.spec import GranuleSpec
+from perga.model.system import GranuleSpec
 
 if TYPE_CHECKING:
     from perga.machine.compiled import CompiledMachine

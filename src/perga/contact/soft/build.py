@@ -1,4 +1,4 @@
-"""SceneSpec -> the soft granules of a scene: arrays, contact tables, chamber wall, hammers.
+"""System -> the soft granules of a scene: arrays, contact tables, chamber wall, hammers.
 
 Materials: the granules' and the chamber's share the kernel's pair table (:mod:`perga.contact.soft.
 laws`); the hammers' materials index the columns of the granule-polygon table
@@ -16,10 +16,10 @@ import numpy as np
 
 from perga.contact.soft import SoftGranules, chamber, contact_parameters, pair_table
 from perga.contact.soft.polygon_set import ContactTable, PolygonSet, contact_table
-from perga.model.spec import SceneSpec, SoftContactSpec
+from perga.model.system import SoftContactSpec, System
 
 
-def granule_table_materials(spec: SceneSpec) -> list[str]:
+def granule_table_materials(spec: System) -> list[str]:
     """The granule table's materials: those of the granules present and fed, sorted, then a
     round chamber's."""
     materials = sorted(spec.granule_materials)
@@ -29,7 +29,7 @@ def granule_table_materials(spec: SceneSpec) -> list[str]:
     return materials
 
 
-def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
+def kernel_table(spec: System, materials: list[str]) -> np.ndarray:
     """The kernel's (n_mat, n_mat, N_PARAMS) table over ``materials`` (granules and wall)."""
     soft = spec.contact_model
     assert isinstance(soft, SoftContactSpec)
@@ -58,9 +58,7 @@ def kernel_table(spec: SceneSpec, materials: list[str]) -> np.ndarray:
     return pair_table(len(materials), rows)
 
 
-def polygon_table(
-    spec: SceneSpec, materials: list[str], polygon_materials: list[str]
-) -> ContactTable:
+def polygon_table(spec: System, materials: list[str], polygon_materials: list[str]) -> ContactTable:
     """The granule-polygon table: rows ``materials`` (granules' used), columns the polygons'."""
     soft = spec.contact_model
     assert isinstance(soft, SoftContactSpec)
@@ -79,7 +77,7 @@ def polygon_table(
 
 
 def soft_granules(
-    spec: SceneSpec,
+    spec: System,
     polygons: PolygonSet,
     polygon_materials: list[str],
     threads: int,

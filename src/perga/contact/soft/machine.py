@@ -7,7 +7,7 @@ centre of gravity. How a hammer resists a contact sets
 the contact's effective mass: a hinged hammer is ``PINNED`` at its hinge with I_A; a welded one
 is part of the rotor, ``KINEMATIC`` on a rotor held at ω or ``PINNED`` at the axis with the
 rotor's moment on a driven rotor; a free one is ``FREE`` with M and I_C. The wall's pieces
-(:meth:`perga.model.spec.ChamberSpec.pieces`) come after the hammers' and never move
+(:meth:`perga.model.system.ChamberSpec.pieces`) come after the hammers' and never move
 (``KINEMATIC``, at rest); only the wall's inner and outer outlines make contacts.
 
 Timing (why the pose is taken ahead). Chipmunk's step drifts positions with the current

@@ -19,10 +19,10 @@ import numpy as np
 
 from perga.analytic.common import reduced_mass
 from perga.analytic.contact import mindlin_ratio, tunnelling_time_step
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.parts import chamber_geometry
 from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
-from perga.case.sizes import masses, radius_range
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.parts import chamber_geometry
+from perga.model.sizes import masses, radius_range
 
 MAX_ROTATION_PER_STEP = 0.05
 """Largest rotor turn in one (Pymunk) step, rad (about 3°): hinge and contact geometry stay

@@ -1,30 +1,35 @@
-"""Case (the validated case file) -> SceneSpec (the system a simulation is built from): the one
-mapping.
+"""Case (the case file, its schema and names valid) -> System (what a simulation is built from):
+the one mapping, compiled once, with the physical cross-checks run on what it built.
 
-Hammers take their outline and mass properties from :mod:`perga.case.hammer_geometry` (a plate's
+Hammers take their outline and mass properties from :mod:`perga.model.hammer_geometry` (a plate's
 rectangle, or a geometry file), in the hammer frame (hinge at the origin, axis +x), spaced
 evenly on the rotor unless ``hammers.angles`` is given; granules start where the placement says
-(:mod:`perga.case.placement`); only the contact pairs the scene uses are passed on; the effects
+(:mod:`perga.model.placement`); only the contact pairs the scene uses are passed on; the effects
 listed in the case, and only those, become the scene's effects; a soft contact model gets its
-stiffness and steps from :mod:`perga.case.timestep`; ``output.vtk_3d`` adds the parts'
-thicknesses for the 3-D view of the output (:class:`~perga.model.spec.DrawingSpec`).
+stiffness and steps from :mod:`perga.model.plan`; ``output.vtk_3d`` adds the parts'
+thicknesses for the 3-D view of the output (:class:`~perga.model.system.DrawingSpec`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.parts import chamber_geometry, hammer_angles, rotor_geometry
-from perga.case.placement import comb, held, initial_spins, initial_state
+from perga.case.load import CaseError, load_case
 from perga.case.schema import Case, CombPlacement, ContactPair
-from perga.case.sizes import initial_radii, masses, mean_mass, quantile_table
-from perga.case.timestep import pair_stiffness, step_plan, tangential_ratio
 from perga.geometry.polygon import vertex_tuples
+from perga.model import checks
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.parts import chamber_geometry, hammer_angles, rotor_geometry
+from perga.model.placement import PlacementError, comb, held, initial_spins, initial_state
+from perga.model.plan import StepPlan, contact_plan, pair_stiffness, step_plan, tangential_ratio
 from perga.model.process import DamageSpec, FeedSpec, OutletSpec, ProcessSpec, Sizes
-from perga.model.spec import (
+from perga.model.sizes import initial_radii, masses, mean_mass, quantile_table
+from perga.model.system import (
     AirDragSpec,
     ChamberSpec,
     ContactSpec,
@@ -36,8 +41,8 @@ from perga.model.spec import (
     HammerSpec,
     RigidContactSpec,
     RotorSpec,
-    SceneSpec,
     SoftContactSpec,
+    System,
 )
 
 
@@ -61,11 +66,10 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
     )
 
 
-def _granules(case: Case) -> tuple[GranuleSpec, ...]:
+def _granules(case: Case, placement: Placement) -> tuple[GranuleSpec, ...]:
     g = case.granules
-    positions, velocities = initial_state(case)
+    positions, velocities, radii = placement
     spins = initial_spins(case)
-    radii = initial_radii(case)
     weights = masses(case, radii)
     bond = case.materials[g.material].detachment_force if held(case) else None
     return tuple(
@@ -221,12 +225,121 @@ def _process(case: Case) -> ProcessSpec:
     )
 
 
-def scene_spec(case: Case) -> SceneSpec:
-    """The engine's description of a validated case (raises ValueError without a placement or
-    a chamber: a simulation needs both)."""
+class Placement(NamedTuple):
+    """The granules' start, built once: centres (n, 2), m; velocities (n, 2), m/s; radii (n,),
+    m."""
+
+    positions: np.ndarray
+    velocities: np.ndarray
+    radii: np.ndarray
+
+
+def compile_case(case: Case) -> System:
+    """The system of a case whose schema and names are valid (:func:`perga.case.load_case`),
+    built once: the parts' geometry, the placement, the sizes, the step plan and the per-pair
+    plan. The physical cross-checks (:mod:`perga.model.checks`) run on what it built, in a
+    stable order (the later ones need the parts, the hammers and the placement); CaseError
+    lists every problem, each naming the case file."""
     if case.chamber is None:
-        raise ValueError("chamber is missing: a simulation needs the wall around the rotor")
-    granules = _granules(case)
+        raise _error(case, [CHAMBER_MISSING])
+    problems, geometry = _geometry_problems(case)
+    if not geometry:
+        raise _error(case, problems)
+    placement, found = _placement(case)
+    problems += found
+    for check in (checks.process, checks.effects, checks.contact_model):
+        problems += check(case)
+    try:
+        plan = step_plan(case)
+    except ValueError:  # an unreachable restitution, which checks.contact_model reports
+        plan = None
+    if plan is not None:
+        problems += checks.time_step(case, plan)
+    if problems:
+        raise _error(case, problems)
+    assert placement is not None and plan is not None
+    return _system(case, placement, plan)
+
+
+CHAMBER_MISSING = "chamber: missing: a simulation needs the wall around the rotor"
+
+
+def check_parameters(case: Case) -> None:
+    """The cross-checks a case without a [chamber] (a parameter set, ``perga paper-check``)
+    can have: its parts, hammers, process, effects and contact model (CaseError)."""
+    problems, geometry = _geometry_problems(case)
+    if geometry:
+        for check in (checks.process, checks.effects, checks.contact_model):
+            problems += check(case)
+    if problems:
+        raise _error(case, problems)
+
+
+def _geometry_problems(case: Case) -> tuple[list[str], bool]:
+    """The problems of the parts' and the hammers' geometry, and whether that geometry was
+    built (the later checks need it)."""
+    problems = checks.parts(case)
+    if problems:
+        return problems, False
+    problems = checks.hammers(case)
+    return problems, not any(p.startswith("hammers.shape:") for p in problems)
+
+
+def check(case: Case) -> None:
+    """Every cross-check of a case whose schema and names are valid: a scene's by compiling it
+    (:func:`compile_case`), a parameter set's own (:func:`check_parameters`); CaseError."""
+    if case.chamber is None:
+        check_parameters(case)
+    else:
+        compile_case(case)
+
+
+def validated(
+    path: str | Path, source_dir: Path | None = None, overrides: Sequence[str] = ()
+) -> Case:
+    """The case file ``path`` validated whole, as ``perga validate`` does: its schema and names
+    (:func:`perga.case.load_case`), then every cross-check (:func:`check`); CaseError."""
+    case = load_case(path, source_dir, overrides)
+    check(case)
+    return case
+
+
+def load_system(
+    path: str | Path, source_dir: Path | None = None, overrides: Sequence[str] = ()
+) -> tuple[Case, System]:
+    """The case file ``path`` (:func:`perga.case.load_case`) and its system
+    (:func:`compile_case`); CaseError listing every problem of either."""
+    case = load_case(path, source_dir, overrides)
+    return case, compile_case(case)
+
+
+def _placement(case: Case) -> tuple[Placement | None, list[str]]:
+    """The granules' start and the problems of it (:func:`~perga.model.checks.granule_inputs`
+    before it is built, :func:`~perga.model.checks.granule_placement` on it); None where it
+    cannot be built."""
+    problems = checks.granule_inputs(case)
+    if problems:
+        return None, problems
+    try:
+        positions, velocities = initial_state(case)
+    except PlacementError as exc:
+        return None, [f"granules.placement: {exc}"]
+    radii = initial_radii(case)
+    return Placement(positions, velocities, radii), checks.granule_placement(case, positions, radii)
+
+
+def _error(case: Case, problems: list[str]) -> CaseError:
+    """``problems`` as a CaseError, each naming the case file (a case made in Python: as
+    they are)."""
+    if case.source_path is None:
+        return CaseError(problems)
+    return CaseError([f"{case.source_path}: {problem}" for problem in problems])
+
+
+def _system(case: Case, placement: Placement, plan: StepPlan) -> System:
+    """The system of ``case`` from its built placement and step plan."""
+    assert case.chamber is not None
+    granules = _granules(case, placement)
     hammers = _hammers(case)
     pairs = {frozenset((case.granules.material, case.hammers.material))}
     pairs.add(frozenset((case.granules.material, case.chamber.material)))
@@ -234,8 +347,7 @@ def scene_spec(case: Case) -> SceneSpec:
         pairs.add(frozenset((case.granules.material,)))
     contacts = tuple(_contact(case, c) for c in case.contacts if frozenset(c.pair) in pairs)
     gravity = (0.0, -case.gravity) if case.effects.gravity_in_plane else (0.0, 0.0)
-    plan = step_plan(case)
-    return SceneSpec(
+    return System(
         rotor=_rotor(case),
         hammers=hammers,
         granules=granules,
@@ -249,5 +361,6 @@ def scene_spec(case: Case) -> SceneSpec:
         contact_model=_contact_model(case),
         drawing=_drawing(case),
         plan=plan,
+        pairs=tuple(contact_plan(case, plan.granule)) if case.contact_model.soft else (),
         process=_process(case),
     )

@@ -1,4 +1,4 @@
-"""Hammers from geometry files in case files (perga.case.hammer_geometry): the same hammer as a
+"""Hammers from geometry files in case files (perga.model.hammer_geometry): the same hammer as a
 plate and as a mesh gives the same engine hammer; a concave (stepped) hammer becomes convex
 pieces; missing files are refused."""
 
@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.cli import main
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case, validated
 
 ROOT = Path(__file__).resolve().parents[2]
 SINGLE = (ROOT / "cases" / "single-granule.toml").read_text()
@@ -42,8 +42,8 @@ def test_mesh_hammer_equals_the_same_plate(tmp_path):
     """The bundled plate mesh and the plate of its dimensions: outline, mass, I_A and centre of
     mass within 1e-6 (the mesh's float32 coordinates; mass properties tests: tests/geometry)."""
     stl = ROOT / "geometry" / "plate_hammer.stl"
-    plate = scene_spec(load_case(_case(tmp_path, PLATE_STL_AS_PLATE, "plate.toml"))).hammers[0]
-    mesh = scene_spec(load_case(_case(tmp_path, _file_shape(str(stl)), "mesh.toml"))).hammers[0]
+    plate = compile_case(validated(_case(tmp_path, PLATE_STL_AS_PLATE, "plate.toml"))).hammers[0]
+    mesh = compile_case(validated(_case(tmp_path, _file_shape(str(stl)), "mesh.toml"))).hammers[0]
     assert mesh.mass == pytest.approx(plate.mass, rel=1e-6)
     assert mesh.moment_about_hinge == pytest.approx(plate.moment_about_hinge, rel=1e-6)
     assert mesh.centre_of_mass == pytest.approx(plate.centre_of_mass, abs=1e-9)
@@ -57,8 +57,8 @@ def test_relative_paths_start_at_the_case_file(tmp_path):
     (tmp_path / "shapes").mkdir()
     svg = (ROOT / "geometry" / "rounded_hammer.svg").read_text()
     (tmp_path / "shapes" / "rounded.svg").write_text(svg)
-    case = load_case(_case(folder, _file_shape("../shapes/rounded.svg", ", thickness = 0.01")))
-    hammer = scene_spec(case).hammers[0]
+    case = validated(_case(folder, _file_shape("../shapes/rounded.svg", ", thickness = 0.01")))
+    hammer = compile_case(case).hammers[0]
     # a 50 mm bar from x = -15 to 110 mm plus a half disc of 25 mm drawn with 32 segments,
     # 10 mm thick steel (geometry/README.md)
     area = 0.125 * 0.05 + 0.5 * 32 * 0.025**2 * math.sin(math.pi / 32)
@@ -70,7 +70,7 @@ def test_stepped_hammer_is_two_convex_pieces(tmp_path):
     135 mm), 10 mm thick steel; mass, centre of mass and I_A from the two rectangles (1e-6: the
     mesh's float32 coordinates)."""
     stl = ROOT / "geometry" / "stepped_hammer.stl"
-    hammer = scene_spec(load_case(_case(tmp_path, _file_shape(str(stl))))).hammers[0]
+    hammer = compile_case(validated(_case(tmp_path, _file_shape(str(stl))))).hammers[0]
     parts = [(-0.015, 0.075, 0.05), (0.075, 0.135, 0.07)]  # x0, x1, width
     masses = [7850 * 0.01 * (x1 - x0) * w for x0, x1, w in parts]
     centres = [(x0 + x1) / 2 for x0, x1, _ in parts]
@@ -88,11 +88,11 @@ def test_stepped_hammer_is_two_convex_pieces(tmp_path):
 
 def test_missing_file_and_mass_given_are_refused(tmp_path):
     with pytest.raises(CaseError) as info:
-        load_case(_case(tmp_path, _file_shape("nowhere.stl")))
+        validated(_case(tmp_path, _file_shape("nowhere.stl")))
     assert any("hammers.shape" in p and "nowhere.stl" in p for p in info.value.problems)
     hammers = ("mass = 0.1\n" + _file_shape("x.stl")[0], _file_shape("x.stl")[1])
     with pytest.raises(CaseError) as info:
-        load_case(_case(tmp_path, hammers))
+        validated(_case(tmp_path, hammers))
     assert any("a file shape's mass follows from its geometry" in p for p in info.value.problems)
 
 

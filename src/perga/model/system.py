@@ -1,5 +1,5 @@
 """The system a simulation is built from: frozen dataclasses in SI units, independent of the
-case-file schema (``perga.case``), which :mod:`perga.model.from_case` maps onto them.
+case-file schema (``perga.case``), which :mod:`perga.model.compile` maps onto them.
 
 Frames: the rotor axis is the origin of the fixed plane frame, ω > 0 turns counter-clockwise.
 A hammer's outline is given in its own frame: hinge at the origin, hammer axis along +x. The
@@ -27,7 +27,7 @@ from perga.geometry.wall import circumscribed, wall_pieces
 from perga.model.process import ProcessSpec
 
 if TYPE_CHECKING:
-    from perga.case.timestep import StepPlan
+    from perga.model.plan import PairPlan, StepPlan
 
 Vec2 = tuple[float, float]
 Mount = Literal["hinged", "welded", "free"]
@@ -52,20 +52,22 @@ def _finite_vec(problems: list[str], name: str, value: Vec2) -> None:
 class RotorSpec:
     """A rotor turning at constant angular velocity about the origin.
 
-    omega: angular velocity, rad/s (>= 0; 0 gives a fixed machine, e.g. a wall test);
+    angular_velocity: rad/s (>= 0; 0 gives a fixed machine, e.g. a wall test);
     radius: rotor disc radius, m (> 0; geometric, used for output and checks);
     outline: the disc's outline (m, counter-clockwise) when it is not a circle of ``radius``
     (output only: the disc is out of the granules' plane).
     """
 
-    omega: float
+    angular_velocity: float
     radius: float
     outline: tuple[Vec2, ...] | None = None
 
     def __post_init__(self) -> None:
         problems: list[str] = []
-        if not (math.isfinite(self.omega) and self.omega >= 0):
-            problems.append(f"omega must be finite and >= 0 rad/s (got {self.omega})")
+        if not (math.isfinite(self.angular_velocity) and self.angular_velocity >= 0):
+            problems.append(
+                f"angular_velocity must be finite and >= 0 rad/s (got {self.angular_velocity})"
+            )
         _positive(problems, "radius", self.radius, "m")
         _raise("rotor", problems)
 
@@ -337,7 +339,7 @@ class AirDragSpec:
 
 @dataclass(frozen=True)
 class DriveSpec:
-    """A rotor of finite inertia driven by a motor that holds ``RotorSpec.omega``.
+    """A rotor of finite inertia driven by a motor that holds ``RotorSpec.angular_velocity``.
 
     inertia: the rotor's moment about its axis without its hammers, kg·m² (welded hammers add
     their own moments about the axis); torque_limit: the largest motor torque, N·m.
@@ -358,7 +360,7 @@ class EffectsSpec:
     """Optional physics; each ``None`` effect is not built at all (no handler, velocity
     function, constraint or per-step work).
 
-    floor_friction: horizontal rotor only (SceneSpec.gravity must be zero); air_drag;
+    floor_friction: horizontal rotor only (System.gravity must be zero); air_drag;
     hinge_friction: Coulomb torque at every hinge, N·m (> 0); drive: finite rotor inertia.
     """
 
@@ -394,7 +396,7 @@ class SoftContactSpec:
     tangential_damping: ratio ζ_t of the tangential dashpot
     −2ζ_t√(k_t m_eff)·v_t, in [0, 1); rolling: rolling-resistance coefficient μ_r;
     end: 'force' (force clamped at zero) or 'overlap'; substeps: granule steps of
-    ``SceneSpec.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
+    ``System.dt`` per Pymunk step of rotor and hammers (>= 1); threads: the kernel's threads
     asked for (None: "auto", :mod:`perga.contact.soft.threads`). Damping per pair comes from
     the pair's restitution, friction from the pair's friction.
     """
@@ -433,7 +435,7 @@ class SoftContactSpec:
 class DrawingSpec:
     """Out-of-plane sizes of the parts for the 3-D view of the output (:mod:`perga.output.
     vtk3d`), m; never used by the engine. Carried by the system because the recorders see the
-    system and its frames only: a ``SceneSpec`` with a drawing is what asks for the 3-D view.
+    system and its frames only: a ``System`` with a drawing is what asks for the 3-D view.
 
     hammer_thickness: one per hammer; rotor_thickness: the disc's; chamber_height: the wall's;
     granule_thickness: every granule's (drawn as cylinders).
@@ -455,7 +457,7 @@ class DrawingSpec:
 
 
 @dataclass(frozen=True)
-class SceneSpec:
+class System:
     """Everything a simulation is built from.
 
     granule_dt: the granules' time step, s (> 0); the machine (rotor and hammers in Pymunk)
@@ -465,7 +467,9 @@ class SceneSpec:
     effects: optional physics; contact_model: :class:`RigidContactSpec` (Pymunk's impulses) or
     :class:`SoftContactSpec`; drawing: sizes for the 3-D view of the output
     (:class:`DrawingSpec`), or None for none; plan: the time-step plan the steps came from
-    (:class:`perga.case.timestep.StepPlan`), None for a spec made by hand; process: feed, outlet
+    (:class:`perga.model.plan.StepPlan`), None for a system made by hand; pairs: each soft
+    contact kind as the steps take it (:class:`perga.model.plan.PairPlan`; none for rigid
+    contacts or a system made by hand); process: feed, outlet
     and damage (:mod:`perga.model.process`), each None unless the system has it. Every material pair
     that can touch must be in ``contacts`` exactly once. Hammers never collide with each other,
     with the rotor or with the chamber wall.
@@ -484,6 +488,7 @@ class SceneSpec:
     contact_model: RigidContactSpec | SoftContactSpec = RigidContactSpec()
     drawing: DrawingSpec | None = None
     plan: StepPlan | None = None
+    pairs: tuple[PairPlan, ...] = ()
     process: ProcessSpec = field(default_factory=ProcessSpec)
     _table: dict[frozenset[str], ContactSpec] = field(init=False, repr=False, compare=False)
 

@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 from perga.case import load_case
-from perga.case.sizes import draw_radii, masses
+from perga.model.sizes import draw_radii, masses
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = (ROOT / "cases" / "bee-bread-separator.toml").read_text()
@@ -87,7 +87,7 @@ def test_feed_rate_by_number_or_by_mass(tmp_path, basis) -> None:
     """A feed of 9-granule comb pieces at 10 per s, or at the mass rate of 10 pieces per s
     (10·9·ρπt·E[r²], E[r²] = (a² + ab + b²)/3 for r uniform on [a, b]): the same items per s,
     to 1e-6 (the mean mass's trapezoid on 4,097 radii)."""
-    from perga.model.from_case import scene_spec
+    from perga.model.compile import compile_case
 
     a, b = 0.00245, 0.00265
     mean_mass = 1350.0 * math.pi * 0.010 * (a * a + a * b + b * b) / 3
@@ -97,5 +97,5 @@ def test_feed_rate_by_number_or_by_mass(tmp_path, basis) -> None:
     text = text.replace("rate = 10.0", f'rate = {rate!r}\nbasis = "{basis}"')
     (tmp_path / "case.toml").write_text(text)
     case = load_case(tmp_path / "case.toml")
-    feed = scene_spec(case).process.feed
+    feed = compile_case(case).process.feed
     assert feed is not None and feed.rate == pytest.approx(10.0, rel=1e-6)

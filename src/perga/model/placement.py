@@ -10,9 +10,6 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.obstacles import initial_obstacles
-from perga.case.parts import hammer_angles
 from perga.case.schema import (
     Case,
     CombPlacement,
@@ -21,8 +18,11 @@ from perga.case.schema import (
     RingPlacement,
     ShotPlacement,
 )
-from perga.case.sizes import initial_radii
 from perga.geometry.clearance import Obstacles
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.obstacles import initial_obstacles
+from perga.model.parts import hammer_angles
+from perga.model.sizes import initial_radii
 
 FloatArray = NDArray[np.float64]
 

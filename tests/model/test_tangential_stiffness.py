@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 from perga.case import CaseError
-from perga.case.timestep import contact_plan, fastest_relative_speed, step_plan
 from perga.contact.soft.build import kernel_table, polygon_table
 from perga.contact.soft.laws import P_KN, P_KT
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case
+from perga.model.plan import contact_plan, fastest_relative_speed, step_plan
 
 from .test_materials import CASE, E_BB, E_STEEL, NU_BB, NU_STEEL, _case
 
@@ -37,7 +37,7 @@ def _mindlin(e_a: float, nu_a: float, e_b: float, nu_b: float) -> float:
 def test_hertz_from_the_materials_takes_mindlins_ratio(tmp_path: Path) -> None:
     """Each pair its own 6G*/E* (1e-12): granule-granule 3(1 − ν)/(2 − ν) = 1.1818, granule-steel
     1.1820; k_t = ratio·k_n in the kernel's table and in the hammers' (polygons') table."""
-    spec = scene_spec(_case(tmp_path))
+    spec = compile_case(_case(tmp_path))
     same = spec.contact("beebread", "beebread")
     steel = spec.contact("beebread", "steel")
     assert same.tangential_ratio == pytest.approx(3 * 0.65 / 1.65, rel=1e-12)
@@ -61,7 +61,7 @@ def test_hertz_from_the_materials_takes_mindlins_ratio(tmp_path: Path) -> None:
     ],
 )
 def test_a_given_ratio_or_the_default(tmp_path: Path, text: str, sets, ratio: float) -> None:
-    spec = scene_spec(_case(tmp_path, text, sets))
+    spec = compile_case(_case(tmp_path, text, sets))
     assert spec.contact("beebread", "beebread").tangential_ratio == pytest.approx(ratio, rel=1e-12)
 
 
@@ -69,7 +69,7 @@ def test_hertz_by_a_shared_duration_keeps_two_sevenths(tmp_path: Path) -> None:
     text = CASE.replace('kind = "hertz"', 'kind = "hertz"\nduration = 1e-4')
     for modulus in (f"youngs_modulus = {E_BB}\n", f"youngs_modulus = {E_STEEL}\n"):
         text = text.replace(modulus, "")
-    spec = scene_spec(_case(tmp_path, text))
+    spec = compile_case(_case(tmp_path, text))
     assert spec.contact("beebread", "steel").tangential_ratio == 2 / 7
 
 
@@ -88,7 +88,7 @@ def test_the_ratio_is_capped_where_an_elastic_solid_is(
         with pytest.raises(CaseError, match=r"contact_model.*tangential_ratio.*outside"):
             _case(tmp_path, text, sets)
     else:
-        assert scene_spec(_case(tmp_path, text, sets)).contact("beebread", "steel")
+        assert compile_case(_case(tmp_path, text, sets)).contact("beebread", "steel")
 
 
 @pytest.mark.parametrize(

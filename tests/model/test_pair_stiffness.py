@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from perga.case import CaseError, load_case
-from perga.case.timestep import contact_durations
-from perga.model.from_case import scene_spec
+from perga.case import CaseError
+from perga.model.compile import compile_case, validated
+from perga.model.plan import contact_durations
 
 SOFT = Path(__file__).resolve().parents[2] / "cases" / "soft-separator.toml"
 RIGID = SOFT.with_name("separator.toml")
@@ -21,11 +21,11 @@ def test_a_pairs_duration_sets_only_that_pairs_contacts() -> None:
     """A duration D for granule-granule contacts is that of a granule striking a rigid wall; two
     granules (reduced mass m/2) then touch for D/√2 (a linear contact's duration goes as
     √(m_eff/k) at a given e; to 1e-12). The hammer's and the wall's contacts keep theirs."""
-    case = load_case(SOFT)
+    case = validated(SOFT)
     assert case.contacts[GRANULES].pair == ("beebread", "beebread")
     before = contact_durations(case)
     D = 2.5e-4
-    own = load_case(SOFT, overrides=[f"contacts[{GRANULES}].duration={D}"])
+    own = validated(SOFT, overrides=[f"contacts[{GRANULES}].duration={D}"])
     after = contact_durations(own)
     assert after["granule-granule"] == pytest.approx(D / math.sqrt(2), rel=1e-12)
     for kind in ("granule-hammer", "granule-wall"):
@@ -33,9 +33,9 @@ def test_a_pairs_duration_sets_only_that_pairs_contacts() -> None:
 
 
 def test_a_pairs_stiffness_reaches_the_kernels_contact() -> None:
-    own = load_case(SOFT, overrides=[f"contacts[{GRANULES}].stiffness=12345.0"])
-    stiffness = [c.stiffness for c in scene_spec(own).contacts]
-    shared = [c.stiffness for c in scene_spec(load_case(SOFT)).contacts]
+    own = validated(SOFT, overrides=[f"contacts[{GRANULES}].stiffness=12345.0"])
+    stiffness = [c.stiffness for c in compile_case(own).contacts]
+    shared = [c.stiffness for c in compile_case(validated(SOFT)).contacts]
     assert stiffness.pop(GRANULES) == 12345.0
     shared.pop(GRANULES)
     assert stiffness == shared
@@ -54,18 +54,18 @@ def test_a_pairs_stiffness_reaches_the_kernels_contact() -> None:
 )
 def test_a_pairs_stiffness_on_both_sides_of_its_limits(sets: list[str], taken: bool) -> None:
     if taken:
-        load_case(SOFT, overrides=sets)
+        validated(SOFT, overrides=sets)
     else:
         with pytest.raises(CaseError, match=rf"contacts\[{GRANULES}\]\.(duration|stiffness)"):
-            load_case(SOFT, overrides=sets)
+            validated(SOFT, overrides=sets)
 
 
 def test_a_pairs_stiffness_refusals() -> None:
     both = [f"contacts[{GRANULES}].duration=1e-4", f"contacts[{GRANULES}].stiffness=1e4"]
     with pytest.raises(CaseError, match=r"duration \(s\) or its stiffness, not both"):
-        load_case(SOFT, overrides=both)
+        validated(SOFT, overrides=both)
     with pytest.raises(CaseError, match=rf"contacts\[{GRANULES}\]\.duration: .*rigid contacts"):
-        load_case(RIGID, overrides=[f"contacts[{GRANULES}].duration=1e-4"])
+        validated(RIGID, overrides=[f"contacts[{GRANULES}].duration=1e-4"])
 
 
 def test_hertz_pairs_with_their_own_stiffness_need_no_moduli(tmp_path: Path) -> None:
@@ -77,6 +77,6 @@ def test_hertz_pairs_with_their_own_stiffness_need_no_moduli(tmp_path: Path) -> 
     case = tmp_path / "hertz.toml"
     case.write_text(text)
     both = ["contacts[0].duration=1e-4", f"contacts[{GRANULES}].stiffness=1e7"]
-    load_case(case, overrides=both)
+    validated(case, overrides=both)
     with pytest.raises(CaseError, match=r"materials\.beebread: Hertz contacts without"):
-        load_case(case, overrides=both[:1])
+        validated(case, overrides=both[:1])

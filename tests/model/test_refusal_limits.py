@@ -1,6 +1,6 @@
 """Every numeric refusal of the case checks on both sides of its limit (issue 18, item 2): the
 limit worked out here from the case's numbers and the physics that sets it, never from the
-code under test; 0.99 and 1.01 of it (the time-step limits: tests/case/test_timestep.py)."""
+code under test; 0.99 and 1.01 of it (the time-step limits: tests/model/test_plan.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
+from perga.model.compile import validated
 
 CASES = Path(__file__).resolve().parents[2] / "cases"
 SIDES = [(0.99, "below"), (1.01, "above")]
@@ -18,7 +19,7 @@ SIDES = [(0.99, "below"), (1.01, "above")]
 def _problems(path: Path, sets: list[str]) -> str:
     """The refusal's text, or "" when the case is taken."""
     try:
-        load_case(path, overrides=sets)
+        validated(path, overrides=sets)
     except CaseError as exc:
         return str(exc)
     return ""

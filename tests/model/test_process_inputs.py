@@ -77,7 +77,7 @@ def test_damage_needs_the_materials_breakage(tmp_path, capsys):
 
 def test_hertz_takes_several_sizes_of_one_material(tmp_path, capsys):
     """Hertz stiffness k_n√R* takes R* from each contact's radii in the kernel
-    (tests/case/test_materials.py), so a size distribution is a valid Hertz case (it was
+    (tests/model/test_materials.py), so a size distribution is a valid Hertz case (it was
     refused while R* was tabled per material pair)."""
     hertz = _with(
         'kind = "linear"\nduration = 1e-4', 'kind = "hertz"\nstiffness = 1e9\nduration = 1e-4'

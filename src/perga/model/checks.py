@@ -1,10 +1,12 @@
-"""Physical cross-checks of a schema-valid case: each returns problems as "key: message" strings.
+"""Physical cross-checks of a schema-valid case, run by :func:`perga.model.compile.compile_case`
+on what it builds: each returns problems as "key: message" strings.
 
-They run after the schema has accepted every field (a cross-check needs valid values): names that
-resolve, a hammer that fits in the chamber, granules that neither overlap each other nor the wall
-at the start, effects that fit the rotor's plane, restitutions a soft contact model can reach,
-and a time step (:mod:`perga.case.timestep`) that neither lets a granule pass through a hammer
-or the wall nor turns the rotor too far in one step, and resolves soft contacts.
+They need valid fields and names (:func:`perga.case.load.load_case` checked those): a hammer
+that fits in the chamber, granules that neither overlap each other nor the wall at the start
+(:func:`granule_inputs` before the placement is built, :func:`granule_placement` on it), effects
+that fit the rotor's plane, restitutions a soft contact law can reach, and a time step
+(:mod:`perga.model.plan`) that neither lets a granule pass through a hammer or the wall nor
+turns the rotor too far in one step, and resolves soft contacts.
 """
 
 from __future__ import annotations
@@ -13,16 +15,6 @@ import math
 
 import numpy as np
 
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.obstacles import initial_obstacles
-from perga.case.parts import (
-    ChamberGeometry,
-    chamber_geometry,
-    hinge_misses,
-    hinge_positions,
-    rotor_geometry,
-)
-from perga.case.placement import PlacementError, face, initial_state
 from perga.case.schema import (
     Case,
     CombPlacement,
@@ -32,11 +24,21 @@ from perga.case.schema import (
     ShotPlacement,
     one_of,
 )
-from perga.case.sizes import initial_radii, radius_range
-from perga.case.timestep import MAX_ROTATION_PER_STEP, fastest_relative_speed, step_plan
 from perga.contact.laws import LAWS, contact_law
 from perga.geometry.clearance import Obstacles, overlapping_pairs
 from perga.geometry.wall import circumscribed, wall_pieces
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.obstacles import initial_obstacles
+from perga.model.parts import (
+    ChamberGeometry,
+    chamber_geometry,
+    hinge_misses,
+    hinge_positions,
+    rotor_geometry,
+)
+from perga.model.placement import face
+from perga.model.plan import MAX_ROTATION_PER_STEP, StepPlan, fastest_relative_speed
+from perga.model.sizes import radius_range
 
 MIN_STEPS_PER_CONTACT = 10
 """Fewest steps per soft contact accepted (symplectic Euler is stable to about t_c/5; e drifts
@@ -47,38 +49,7 @@ MAX_RANDOM_PACKING = 0.5
 sequential addition jams near 0.547 in 2-D)."""
 
 
-def _names(case: Case) -> list[str]:
-    names = set(case.materials)
-    used = [
-        ("hammers.material", case.hammers.material),
-        ("granules.material", case.granules.material),
-    ]
-    if case.chamber:
-        used.append(("chamber.material", case.chamber.material))
-    used += [(f"contacts[{i}].pair", n) for i, c in enumerate(case.contacts) for n in c.pair]
-    problems = [
-        f"{key}: unknown material {name!r} (defined: {', '.join(sorted(names))})"
-        for key, name in used
-        if name not in names
-    ]
-    if problems:
-        return problems
-    needed = [(case.granules.material, case.hammers.material)]
-    if case.chamber:
-        needed.append((case.granules.material, case.chamber.material))
-    if case.effects.granule_collisions:
-        needed.append((case.granules.material, case.granules.material))
-    for a, b in needed:
-        try:
-            case.contact(a, b)
-        except KeyError:
-            problems.append(
-                f"contacts: no entry for the pair [{a!r}, {b!r}], which this scene uses"
-            )
-    return problems
-
-
-def _hammers(case: Case) -> list[str]:
+def hammers(case: Case) -> list[str]:
     h = case.hammers
     problems = []
     if h.mount != "free" and h.velocity != (0.0, 0.0):
@@ -122,7 +93,7 @@ def _hammers(case: Case) -> list[str]:
     return problems
 
 
-def _parts(case: Case) -> list[str]:
+def parts(case: Case) -> list[str]:
     """The rotor disc and chamber files load (their errors name the file)."""
     problems = []
     for name, load in (("rotor.shape", rotor_geometry), ("chamber.shape", chamber_geometry)):
@@ -140,19 +111,17 @@ def _parts(case: Case) -> list[str]:
     return problems
 
 
-def _granules(case: Case) -> list[str]:
+def granule_inputs(case: Case) -> list[str]:
+    """What the placement needs before it can be built: a placement, counts that match, a
+    shot on the hammer's face, a random annulus that can hold the pack, comb cells that hold
+    the granules. Any problem here: the placement is not built."""
     g, placement = case.granules, case.granules.placement
-    if case.chamber is None:
-        return []  # a parameter set (perga paper-check), not a scene
     if placement is None:
         return [
             "granules.placement: missing: a scene (a case with a [chamber]) needs the granules' "
             "start positions (kind = 'explicit', 'ring', 'random', 'comb' or 'shot')"
         ]
     problems = []
-    wall = chamber_geometry(case)
-    assert wall is not None
-    limit = wall.inner_radius - g.radius
     if isinstance(placement, ExplicitPlacement):
         if len(placement.positions) != g.count:
             problems.append(
@@ -168,9 +137,10 @@ def _granules(case: Case) -> list[str]:
                 )
     if isinstance(placement, ShotPlacement):
         problems += _shot(case, placement)
-        if problems:
-            return problems
     if isinstance(placement, RandomPlacement):
+        wall = chamber_geometry(case)
+        assert wall is not None
+        limit = wall.inner_radius - g.radius
         if not placement.inner_radius + g.radius <= placement.outer_radius <= limit:
             problems.append(
                 "granules.placement.outer_radius: must be in [inner_radius + radius, "
@@ -186,34 +156,33 @@ def _granules(case: Case) -> list[str]:
                     f"granules.count: {g.count} granules fill {fraction:.0%} of the annulus; a "
                     f"random pack needs <= {MAX_RANDOM_PACKING:.0%}: fewer granules or a wider ring"
                 )
-            else:  # the hammers may still leave too little room: try the pack itself
-                try:
-                    initial_state(case)
-                except PlacementError as exc:
-                    problems.append(f"granules.placement: {exc}")
-        return problems
     if isinstance(placement, CombPlacement) and placement.pitch < 2 * radius_range(case)[1]:
         problems.append(
             f"granules.placement.pitch: cells {placement.pitch:g} m apart cannot hold granules "
             f"of radius up to {radius_range(case)[1]:g} m: needs >= {2 * radius_range(case)[1]:g}"
         )
-        return problems
-    if isinstance(placement, CombPlacement) and g.count != placement.rows * placement.columns:
+    elif isinstance(placement, CombPlacement) and g.count != placement.rows * placement.columns:
         problems.append(
             f"granules.count: a comb of {placement.rows} × {placement.columns} cells holds "
             f"{placement.rows * placement.columns} granules (got {g.count})"
         )
-        return problems
-    positions, _ = initial_state(case)
-    radii = initial_radii(case)
+    return problems
+
+
+def granule_placement(case: Case, positions: np.ndarray, radii: np.ndarray) -> list[str]:
+    """The built placement (centres ``positions`` (n, 2), m, of granules of ``radii``, m):
+    an overlap allowed below half the smallest radius, and no granule overlapping the wall, a
+    hammer or another by more (a random pack is clear by construction: not checked again)."""
+    placement = case.granules.placement
+    if isinstance(placement, RandomPlacement):
+        return []
     allowed = placement.overlap if isinstance(placement, ExplicitPlacement) else 0.0
     if not allowed < 0.5 * radii.min():
         return [
-            *problems,
             f"granules.placement.overlap: must be below half the smallest radius, "
             f"{0.5 * radii.min():g} m (got {allowed:g})",
         ]
-    return problems + _overlaps(case, positions, radii, allowed)
+    return _overlaps(case, positions, radii, allowed)
 
 
 def _overlaps(case: Case, positions: np.ndarray, radii: np.ndarray, allowed: float) -> list[str]:
@@ -261,7 +230,7 @@ def _shot(case: Case, placement: ShotPlacement) -> list[str]:
     return problems
 
 
-def _effects(case: Case) -> list[str]:
+def effects(case: Case) -> list[str]:
     fx, rotor = case.effects, case.rotor
     problems = []
     if fx.floor_friction and rotor.plane != "horizontal":
@@ -285,7 +254,7 @@ def _effects(case: Case) -> list[str]:
     return problems
 
 
-def _contact_model(case: Case) -> list[str]:
+def contact_model(case: Case) -> list[str]:
     cm = case.contact_model
     if not cm.soft:
         return [
@@ -390,13 +359,9 @@ def _mindlin_moduli(case: Case) -> list[str]:
     return _missing_moduli(case, used, "contact_model.tangential_ratio = 'mindlin' needs")
 
 
-def _time_step(case: Case) -> list[str]:
-    if case.chamber is None or case.granules.placement is None:
-        return []
-    try:
-        plan = step_plan(case)
-    except ValueError:  # an unreachable restitution, reported by _contact_model
-        return []
+def time_step(case: Case, plan: StepPlan) -> list[str]:
+    """The step ``plan`` (:func:`perga.model.plan.step_plan`) against tunnelling, the rotor's
+    turn and the soft contacts' resolution."""
     problems = []
     v = fastest_relative_speed(case)
     if plan.granule > plan.tunnelling:
@@ -427,23 +392,7 @@ def _time_step(case: Case) -> list[str]:
     return problems
 
 
-def check_case(case: Case) -> list[str]:
-    """Every cross-check's problems, in a stable order (names first: later checks need them)."""
-    problems = _names(case)
-    if problems:
-        return problems
-    problems = _parts(case)
-    if problems:
-        return problems  # the later checks need the rotor's and chamber's geometry
-    problems = _hammers(case)
-    if any(p.startswith("hammers.shape:") for p in problems):
-        return problems  # the later checks need the hammer's geometry
-    for check in (_granules, _process, _effects, _contact_model, _time_step):
-        problems += check(case)
-    return problems
-
-
-def _process(case: Case) -> list[str]:
+def process(case: Case) -> list[str]:
     """Feed, outlet and damage: the region inside the chamber, an outlet granules can reach,
     the material parameters they need."""
     problems = []

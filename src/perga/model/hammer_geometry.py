@@ -5,7 +5,7 @@ hammer.PlateHammer`); a file shape from :mod:`perga.geometry`: a closed mesh giv
 the rotor plane and its mass properties with the hammer material's density, a 2-D outline its
 extrusion to ``thickness``. Either way the hinge is the origin of the file's frame and the
 hammer axis is +x. A concave outline is split into convex pieces by the engine
-(:class:`~perga.model.spec.HammerSpec`).
+(:class:`~perga.model.system.HammerSpec`).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Rotor discs and chambers from geometry files (perga.case.parts, perga.geometry.wall): the
+"""Rotor discs and chambers from geometry files (perga.model.parts, perga.geometry.wall): the
 wall's pieces against closed forms, impacts on a drawn wall against the restitution law, the
 hinge-hole check, and the bundled cases that use them."""
 
@@ -12,7 +12,7 @@ import meshio
 import numpy as np
 import pytest
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.cli import main
 from perga.contact.soft.machine import MachinePolygons
 from perga.engine import Simulation
@@ -22,9 +22,9 @@ from perga.geometry.polygon import signed_area
 from perga.geometry.units import GeometryError
 from perga.geometry.wall import circumscribed, wall_pieces
 from perga.machine.machine import build_machine
-from perga.model import ContactSpec, GranuleSpec, RotorSpec, SceneSpec
-from perga.model.from_case import scene_spec
-from perga.model.spec import ChamberSpec, RigidContactSpec, SoftContactSpec
+from perga.model import ContactSpec, GranuleSpec, RotorSpec, System
+from perga.model.compile import compile_case, validated
+from perga.model.system import ChamberSpec, RigidContactSpec, SoftContactSpec
 
 ROOT = Path(__file__).resolve().parents[2]
 ROUND = read_outline(ROOT / "geometry" / "chamber_round.txt", "mm").vertices
@@ -67,7 +67,7 @@ def test_too_thick_wall_is_refused_with_the_file_named(tmp_path):
     path = _short("stepped-hammers.toml", tmp_path, 0.3)
     path.write_text(path.read_text().replace("wall_thickness = 0.01", "wall_thickness = 0.02"))
     with pytest.raises(CaseError) as info:
-        load_case(path)
+        validated(path)
     assert any(
         "chamber.wall_thickness:" in p and "chamber_screen.svg" in p for p in info.value.problems
     )
@@ -77,7 +77,7 @@ def test_hinges_must_sit_in_the_rotor_holes(tmp_path):
     path = _short("stepped-hammers.toml", tmp_path, 0.3)
     path.write_text(path.read_text().replace("hinge_radius = 0.12", "hinge_radius = 0.1"))
     with pytest.raises(CaseError) as info:
-        load_case(path)
+        validated(path)
     problems = [p for p in info.value.problems if "hinge hole" in p]
     assert len(problems) == 4 and "rotor_disc_4_holes.stl" in problems[0]
 
@@ -93,7 +93,7 @@ def _wall_hit(soft: bool, e: float, v0: float = 3.0, at_joint: float | None = No
         normal = b / np.linalg.norm(b)
         start = b - normal * (RADIUS + 0.002) + at_joint * np.array([-normal[1], normal[0]])
     stiffness = 1.6e-4 * (math.pi / 1e-4) ** 2 if soft else None  # N/m: t_c ≈ 0.1 ms
-    spec = SceneSpec(
+    spec = System(
         rotor=RotorSpec(0.0, 0.1),
         hammers=(),
         granules=(GranuleSpec(tuple(start), tuple(v0 * normal), RADIUS, MASS, "bb"),),
@@ -147,13 +147,13 @@ def test_bundled_machine_cases_run_and_write_their_geometry(name, duration, clos
     assert summary["status"] == "completed"
     assert summary["impacts"] > 0
     assert abs(summary["energy"]["closure"]) <= closure
-    case = load_case(ROOT / "cases" / name)
+    case = validated(ROOT / "cases" / name)
     chamber = meshio.read(out / "vtk" / "chamber.vtu").points[:, :2]
     drawn = read_outline(ROOT / "cases" / case.chamber.shape.path, "mm").vertices
     assert len(chamber) == len(drawn)
     assert np.abs(chamber - drawn).max() <= 1e-12
     hammers = meshio.read(out / "vtk" / "hammers_000000.vtu")
-    assert len(hammers.points) == sum(len(h.outline) for h in scene_spec(case).hammers)
+    assert len(hammers.points) == sum(len(h.outline) for h in compile_case(case).hammers)
     disc = 256  # the rotor disc's section: the bundled discs are 256-gons
     assert len(meshio.read(out / "vtk" / "rotor_000000.vtu").points) == disc
 
@@ -164,8 +164,8 @@ def test_machine_polygons_keep_each_bodys_features(tmp_path):
     its 180 inner joints as smooth joints in both neighbouring pieces. (A set that shifted the
     kind column with the vertex indices lost every corner of hammers 1-7 and of the wall: the
     ledger of the 0.3 s run closed to −784 %.)"""
-    case = load_case(_short("plate-hammers-soft.toml", tmp_path, 0.3))
-    machine = MachinePolygons(build_machine(scene_spec(case)))
+    case = validated(_short("plate-hammers-soft.toml", tmp_path, 0.3))
+    machine = MachinePolygons(build_machine(compile_case(case)))
     p = machine.polygons
     kinds = p.corner[:, 2]
     assert set(np.unique(kinds)) <= {0, CORNER, SMOOTH_JOINT}

@@ -1,4 +1,4 @@
-"""Time steps of a case (perga.case.timestep): rigid and soft, against the contact closed forms."""
+"""Time steps of a case (perga.model.plan): rigid and soft, against the contact closed forms."""
 
 import math
 from pathlib import Path
@@ -6,8 +6,9 @@ from pathlib import Path
 import pytest
 
 from perga.analytic.contact import HERTZ_DURATION_COEFFICIENT, tunnelling_time_step
-from perga.case import CaseError, load_case
-from perga.case.timestep import (
+from perga.case import CaseError
+from perga.model.compile import validated
+from perga.model.plan import (
     MAX_ROTATION_PER_STEP,
     contact_durations,
     contact_plan,
@@ -26,7 +27,7 @@ SINGLE = (ROOT / "cases" / "single-granule.toml").read_text()
 def _case(tmp_path, extra: str, replace: tuple[str, str] = ("", "")):
     path = tmp_path / "case.toml"
     path.write_text(SINGLE.replace(*replace) + "\n" + extra)
-    return load_case(path)
+    return validated(path)
 
 
 def test_rigid_auto_step_is_half_the_tunnelling_bound_or_the_rotation_bound(tmp_path):
@@ -97,7 +98,7 @@ def test_gravity_in_the_plane_adds_a_fall_across_the_chamber(tmp_path):
     text = SINGLE.replace(floor, "[effects.gravity_in_plane]\n")
     path = tmp_path / "vertical.toml"
     path.write_text(text.replace('plane = "horizontal"', 'plane = "vertical"'))
-    vertical = load_case(path)
+    vertical = validated(path)
     assert fastest_relative_speed(vertical) == pytest.approx(
         fastest_relative_speed(flat) + math.sqrt(4 * 9.80665 * 0.2), rel=1e-12
     )
@@ -119,10 +120,10 @@ def test_the_tunnelling_check_on_both_sides_of_its_limit(tmp_path, factor, refus
     path.write_text(SINGLE)
     dt = f"solver.dt={factor * limit!r}"
     if not refused:
-        assert load_case(path, overrides=[dt]).solver.dt == factor * limit
+        assert validated(path, overrides=[dt]).solver.dt == factor * limit
         return
     with pytest.raises(CaseError, match="lets a granule pass through a hammer or the wall") as e:
-        load_case(path, overrides=[dt])
+        validated(path, overrides=[dt])
     assert f"{limit:.3g} s" in str(e.value)
 
 
@@ -148,10 +149,10 @@ def test_the_rotation_and_contact_checks_on_both_sides_of_their_limits(
     path.write_text(text)
     dt = f"solver.dt={factor * limit!r}"
     if not refused:
-        assert load_case(path, overrides=[dt]).solver.dt == factor * limit
+        assert validated(path, overrides=[dt]).solver.dt == factor * limit
         return
     with pytest.raises(CaseError, match=message):
-        load_case(path, overrides=[dt])
+        validated(path, overrides=[dt])
 
 
 # --- added by the mutation run (docs/testing.md) ------------------------------------------
@@ -213,7 +214,7 @@ def test_a_free_hammer_off_its_axis_offers_a_quarter_of_its_mass(tmp_path):
     text = SINGLE.replace(plate, shape).replace('mount = "hinged"', 'mount = "free"')
     path.write_text(text.replace("mass = 0.02826\n", ""))
     mass = 7850.0 * 0.060 * 0.016 * 0.01
-    assert hammer_effective_mass(load_case(path)) == pytest.approx(mass / 4, rel=1e-12)
+    assert hammer_effective_mass(validated(path)) == pytest.approx(mass / 4, rel=1e-12)
 
 
 def test_the_rotor_turn_bounds_the_machine_step_with_substeps(tmp_path):
@@ -273,7 +274,7 @@ def test_speeds_below_a_millimetre_a_second_are_planned_at_it(tmp_path):
         + hertz
         + "stiffness = 1e8\n"
     )
-    case = load_case(path)
+    case = validated(path)
     assert fastest_relative_speed(case) < 1e-5
     k, m, v = 1e8 * math.sqrt(0.0025), case.granule_mass, 1e-3
     t_c = HERTZ_DURATION_COEFFICIENT * (m * m / (k * k * v)) ** 0.2

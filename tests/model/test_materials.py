@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from perga.case import CaseError, load_case
+from perga.case import CaseError
 from perga.engine.simulation import Simulation
-from perga.model.from_case import scene_spec
+from perga.model.compile import compile_case, validated
 
 E_BB, NU_BB = 5.0e6, 0.35  # Pa, -: a soft granule material (issue 19's)
 E_STEEL, NU_STEEL = 2.1e11, 0.30
@@ -77,13 +77,13 @@ duration = 0.01
 def _case(tmp_path: Path, text: str = CASE, overrides: tuple[str, ...] = ()):
     path = tmp_path / "materials.toml"
     path.write_text(text)
-    return load_case(path, overrides=list(overrides))
+    return validated(path, overrides=list(overrides))
 
 
 def test_pair_stiffness_is_four_thirds_of_the_effective_modulus(tmp_path: Path) -> None:
     """1/E* = (1 − ν_a²)/E_a + (1 − ν_b²)/E_b by hand: granule-granule E/(2(1 − ν²)) =
     2.8490028e6 Pa, granule-steel 5.6979e6 Pa; k_n = (4/3)E* (rel 1e-12, rounding)."""
-    spec = scene_spec(_case(tmp_path))
+    spec = compile_case(_case(tmp_path))
     same = E_BB / (2.0 * (1.0 - NU_BB**2))
     steel = 1.0 / ((1.0 - NU_BB**2) / E_BB + (1.0 - NU_STEEL**2) / E_STEEL)
     assert same == pytest.approx(2.8490028e6, rel=1e-7)
@@ -99,7 +99,7 @@ def test_hertz_contacts_take_their_own_radii_and_a_flat_wall(tmp_path: Path) -> 
     kernel's first forces (the granules at rest) (4/3)E*√R* δ^{3/2} (rel 1e-9). The wall's R*
     once came from its material's granule radius (r/2 here: 2^{-1/2} of this stiffness) and the
     pair's from one radius per material (two sizes were refused)."""
-    spec = scene_spec(_case(tmp_path))
+    spec = compile_case(_case(tmp_path))
     (g,) = spec.granules
     d_pair, d_wall = 2e-5, 3e-5
     r_a, r_b, r_w = 0.002, 0.004, 0.003
@@ -144,7 +144,7 @@ def test_hertz_moduli_refusals(tmp_path: Path, sets: tuple[str, ...], problem: s
     "sets", [("materials.steel.poisson_ratio=0.5",), ("materials.steel.youngs_modulus=1000.0",)]
 )
 def test_hertz_moduli_at_their_limits_are_taken(tmp_path: Path, sets: tuple[str, ...]) -> None:
-    assert scene_spec(_case(tmp_path, overrides=sets)).contact("beebread", "steel").stiffness > 0
+    assert compile_case(_case(tmp_path, overrides=sets)).contact("beebread", "steel").stiffness > 0
 
 
 def test_a_material_without_moduli_is_named(tmp_path: Path) -> None:
@@ -168,7 +168,7 @@ def test_the_run_summary_states_each_contact(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     contacts = {c["contact"]: c for c in summary["contacts"]}
     assert set(contacts) == {"granule-hammer", "granule-wall", "granule-granule"}
-    spec = scene_spec(_case(tmp_path))
+    spec = compile_case(_case(tmp_path))
     for c in contacts.values():
         assert c["stiffness"] == spec.contact(*c["materials"]).stiffness
         assert c["stiffness_unit"].startswith("Pa") and c["restitution"] == 0.7
@@ -189,14 +189,14 @@ def test_hertz_by_duration_lasts_that_long_at_the_fastest_speed(tmp_path: Path) 
     """(t_c, e) for Hertz as for linear contacts: with contact_model.duration = 0.1 ms (and no
     moduli), a granule striking the wall head-on at the fastest relative speed lasts 0.1 ms
     (the closed form, rel 1e-9), and every pair shares the k_n that gives it."""
-    from perga.case.timestep import contact_durations
+    from perga.model.plan import contact_durations
 
     text = CASE.replace('kind = "hertz"', 'kind = "hertz"\nduration = 1e-4')
     for modulus in (f"youngs_modulus = {E_BB}\n", f"youngs_modulus = {E_STEEL}\n"):
         text = text.replace(modulus, "")
     case = _case(tmp_path, text)
     assert contact_durations(case)["granule-wall"] == pytest.approx(1e-4, rel=1e-9)
-    spec = scene_spec(case)
+    spec = compile_case(case)
     assert (
         spec.contact("beebread", "steel").stiffness
         == spec.contact("beebread", "beebread").stiffness

@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
-from perga.case.hammer_geometry import hammer_geometry
-from perga.case.parts import chamber_geometry, hammer_angles, hinge_positions
 from perga.case.schema import Case
 from perga.geometry.clearance import Obstacles
+from perga.model.hammer_geometry import hammer_geometry
+from perga.model.parts import chamber_geometry, hammer_angles, hinge_positions
 
 
 def hammer_outlines(case: Case) -> list[np.ndarray]:

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from perga.case.hammer_geometry import MESH_SUFFIXES, resolve_path
 from perga.case.schema import Case, PartFile
 from perga.geometry.mass import load_mesh
 from perga.geometry.outline import read_outline
@@ -23,6 +22,7 @@ from perga.geometry.polygon import FloatArray, contains
 from perga.geometry.properties import area_properties
 from perga.geometry.section import Section, section_mesh
 from perga.geometry.units import GeometryError
+from perga.model.hammer_geometry import MESH_SUFFIXES, resolve_path
 
 
 @dataclass(frozen=True)
