@@ -679,7 +679,7 @@ class ContactKind:
         )
 
 
-class ContactModel(Strict):
+class ContactModelTable(Strict):
     """[contact_model]: how granule contacts are resolved.
 
     'rigid': Pymunk impulses (instantaneous, restitution and friction exact per impact);
@@ -747,7 +747,7 @@ class ContactModel(Strict):
     )
 
     @model_validator(mode="after")
-    def _stiffness_given(self) -> ContactModel:
+    def _stiffness_given(self) -> ContactModelTable:
         if self.kind == "rigid":
             soft_only = sorted(self.model_fields_set - {"kind"})
             if soft_only:
@@ -941,7 +941,7 @@ class Case(Strict):
     outlet: Outlet | None = Field(None, description="where granules leave")
     damage: Damage | None = Field(None, description="breakage of granules by impacts")
     effects: Effects = Field(default_factory=Effects)
-    contact_model: ContactModel = Field(default_factory=ContactModel)
+    contact_model: ContactModelTable = Field(default_factory=ContactModelTable)
     solver: Solver = Field(default_factory=Solver)
     output: Output = Field(default_factory=Output)
     gravity: float = Field(9.80665, ge=0, le=100, description="gravity, m/s², in [0, 100]")

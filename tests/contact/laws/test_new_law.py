@@ -70,7 +70,7 @@ def test_the_new_law_reaches_the_restitutions_it_says(tmp_path, toy) -> None:
 
 
 def test_the_schema_lists_the_registered_laws(toy) -> None:
-    kind = json.loads(json_schema())["$defs"]["ContactModel"]["properties"]["kind"]
+    kind = json.loads(json_schema())["$defs"]["ContactModelTable"]["properties"]["kind"]
     assert kind["enum"] == ["rigid", "linear", "hertz", "toy"]
     assert "| `kind` | `one of 'rigid', 'linear', 'hertz', 'toy'` |" in markdown_reference()
 
