@@ -11,7 +11,7 @@ import pytest
 
 from perga.engine import Simulation
 from perga.machine import units
-from perga.machine.effects import AirDrag, FloorFriction, Granules
+from perga.machine.effects import AirDrag, FloorFriction
 from perga.model import (
     AirDragSpec,
     ChamberSpec,
@@ -91,7 +91,7 @@ def _kicked(sim: Simulation) -> list[int]:
 
     before = state()
     if sim.kicks is not None:
-        sim.kicks.run(units.to_internal(sim.dt, units.TIME))
+        sim.kicks.run(sim.dt)
     return [i for i, (a, b) in enumerate(zip(before, state(), strict=True)) if a != b]
 
 
@@ -198,7 +198,7 @@ def test_kicks_match_the_per_granule_formulas() -> None:
     expected, removed, supplied, dragged = _per_granule(sim, dt)
     floor, drag = sim.machine.effects
     assert sim.kicks is not None
-    sim.kicks.run(dt)
+    sim.kicks.run(spec.granule_dt)  # s: the kicks are SI
     for body, v in zip(bodies, expected, strict=True):
         np.testing.assert_allclose(tuple(body.velocity), tuple(v), rtol=1e-14, atol=1e-300)
     assert tuple(bodies[0].velocity) == tuple(expected[0])  # stopped on the floor
@@ -206,34 +206,6 @@ def test_kicks_match_the_per_granule_formulas() -> None:
     assert floor.supplied == pytest.approx(supplied * units.ENERGY, rel=1e-14)
     assert drag.removed == pytest.approx(dragged * units.ENERGY, rel=1e-14)
     assert floor.removed > 0 and drag.removed > 0 and floor.supplied != 0
-
-
-def test_kicks_give_the_same_floats_in_any_units() -> None:
-    """A kick computes in internal units whatever units its arrays are in (the soft kernel's
-    are SI, the rigid model's internal): positions in m and velocities in units of half a
-    mm/ms (a power of two, so that the scaling itself is exact) give, bit for bit, the
-    velocities and energies of the same granules in internal units."""
-    rng = np.random.default_rng(3)
-    v_internal = rng.normal(0.0, 2.0, (40, 2))
-    x_internal = rng.uniform(-80.0, 80.0, (40, 2))
-    masses, radii = rng.uniform(20e-6, 90e-6, 40), rng.uniform(1e-3, 3e-3, 40)
-    states = {
-        "internal": Granules(v_internal.copy(), x_internal.copy(), 1.0, 1.0, masses, radii),
-        "scaled": Granules(
-            v_internal * 2.0, x_internal * units.LENGTH, 2.0, units.LENGTH, masses, radii
-        ),
-    }
-    energies = {}
-    for name, granules in states.items():
-        sim = _sim(floor_friction=EFFECTS["floor_friction"], air_drag=EFFECTS["air_drag"])
-        sim.machine.rotor.angular_velocity = 0.05
-        floor, drag = sim.machine.effects
-        floor.kick(granules, 0.5)
-        drag.kick(granules, 0.5)
-        energies[name] = (floor.removed, floor.supplied, drag.removed)
-    assert np.array_equal(states["scaled"].velocities, states["internal"].velocities * 2.0)
-    assert not np.array_equal(states["internal"].velocities, v_internal)  # both kicks acted
-    assert energies["scaled"] == energies["internal"] and min(energies["internal"]) > 0
 
 
 def test_air_drag_closed_form() -> None:

@@ -90,7 +90,7 @@ class Simulation:
         self.contacts: ContactModel = model(
             self.machine, record_impacts=record_impacts, track_energy=track_energy
         )
-        kicks = KickRunner(self.machine.effects, self.contacts.kinematics(), self._dt_internal)
+        kicks = KickRunner(self.machine.effects, self.contacts.kinematics(), self.dt)
         self.kicks = kicks if kicks else None
         """The effects' kicks on the granules (None when the spec lists none, or the contact
         model took the only one over)."""
@@ -132,7 +132,7 @@ class Simulation:
         """Advance by one machine step dt."""
         end = (self.steps + 1) * self.dt
         if self.kicks is not None:
-            self.kicks.run(self._dt_internal)
+            self.kicks.run(self.dt)
         before = self.machine.state()
         self.contacts.before_machine_step(end, before)
         if self.meter is not None:

@@ -12,10 +12,10 @@ every listed kick changes the velocity array in place in registry order, each a 
 change over dt that never reverses the velocity it opposes, and one write sets them (none for
 the kernel's arrays). A contact model may take the last kick over and apply it itself, after
 the others and before it moves anything: the soft kernel applies floor friction
-(:class:`FloorKick`) at the start of its call, the same compiled loop on the same arrays. A
-kick computes in Chipmunk's internal units whatever units the arrays are in, dividing by their
-unit on the way in and multiplying on the way out. Effects that are constraints (hinge
-friction, drive) are pymunk motors.
+(:class:`FloorKick`) at the start of its call, the same compiled loop on the same arrays. The
+kicks and their laws are in SI (m, s, kg, J), whatever a contact model keeps its granules in.
+Effects that are constraints (hinge friction, drive) are pymunk motors, and book their losses
+in Chipmunk's internal units (:mod:`perga.machine.units`).
 
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
@@ -49,8 +49,6 @@ if TYPE_CHECKING:
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit (1e-3)."""
-MASS = u.MASS
-"""kg per internal mass unit, a module global for the compiled kicks."""
 
 Term = Literal["friction", "drag", "drive", "contact"]
 FloatArray = NDArray[np.float64]
@@ -58,8 +56,7 @@ FloatArray = NDArray[np.float64]
 
 class GranuleKinematics(Protocol):
     """All granules' velocities, read and written at once for the effects' kicks, rows in the
-    spec's granule order, in the model's own units with the factors to Chipmunk's internal units
-    (mm/ms; positions mm): an internal value is the array's divided by its unit."""
+    spec's granule order, SI."""
 
     @property
     def count(self) -> int:
@@ -71,9 +68,9 @@ class GranuleKinematics(Protocol):
         may be the model's own arrays)."""
         ...
 
-    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
-        """Velocities (n, 2), positions (n, 2) if asked for (else None), and the internal
-        velocity and length units in the arrays' units: the model's own arrays or fresh ones."""
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        """Velocities (n, 2), m/s, and positions (n, 2), m, if asked for (else None): the
+        model's own arrays or fresh ones."""
         ...
 
     def write_velocities(self, velocities: FloatArray) -> None:
@@ -90,30 +87,36 @@ class GranuleKinematics(Protocol):
 
 class Effect:
     """Base of all effects: the ledger term its removed energy belongs to, and its counters
-    (kept in internal energy units, read in J)."""
+    (kept in ``energy_unit``, read in J)."""
 
     name: ClassVar[str]
     term: ClassVar[Term]
+    energy_unit: ClassVar[float] = u.ENERGY
+    """J per unit of the counters: Chipmunk's internal energy unit (constraints, whose losses
+    are booked from the machine's states in internal units)."""
 
     def __init__(self) -> None:
         self._energy = np.zeros(2)
-        """Removed and supplied so far, internal energy units: an array, so that a contact model
+        """Removed and supplied so far, in ``energy_unit``: an array, so that a contact model
         applying this effect's kick in its own compiled step can add to it (:class:`FloorKick`)."""
 
     @property
     def removed(self) -> float:
         """Energy this effect has taken out of the bodies since t = 0, J (>= 0)."""
-        return float(self._energy[0]) * u.ENERGY
+        return float(self._energy[0]) * self.energy_unit
 
     @property
     def supplied(self) -> float:
         """Work the rotor has done on the bodies through this effect since t = 0, J."""
-        return float(self._energy[1]) * u.ENERGY
+        return float(self._energy[1]) * self.energy_unit
 
 
 class Kick(Effect):
     """An effect that changes all granules' velocities once per step, before the contacts and
-    Chipmunk's step, as array operations (module docstring), run by a :class:`KickRunner`."""
+    Chipmunk's step, as array operations (module docstring), run by a :class:`KickRunner`; its
+    counters are in J."""
+
+    energy_unit = 1.0
 
     def __init__(self) -> None:
         super().__init__()
@@ -121,23 +124,21 @@ class Kick(Effect):
         """Whether :meth:`kick` needs the granules' positions."""
 
     def kick(self, granules: Granules, dt: float) -> None:
-        """Change the ``granules``' velocities in place by one step of ``dt`` (internal time
-        units) of this effect and count the energy (internal units); their positions are given
-        if :attr:`needs_positions`."""
+        """Change the ``granules``' velocities in place by one step of ``dt`` (s) of this effect
+        and count the energy (J); their positions are given if :attr:`needs_positions`."""
         raise NotImplementedError
 
     def hand_over(self, granules: GranuleKinematics, dt: float) -> bool:
         """Whether the contact model of ``granules`` takes this kick over, to apply it itself
-        at the start of each machine step of ``dt`` (internal time units); none does but
-        :class:`FloorFriction`'s."""
+        at the start of each machine step of ``dt`` (s); none does but :class:`FloorFriction`'s."""
         return False
 
 
 class KickRunner:
     """Runs the kicks among ``effects`` on the granules of a contact model: one read, each kick
-    in registry order, one write (internal units). The last kick, if the contact model takes it
-    over (:meth:`Kick.hand_over`; machine steps of ``dt``, internal time units), is the model's
-    to apply after the others, at the start of its own work in the step, and not run here."""
+    in registry order, one write (SI). The last kick, if the contact model takes it over
+    (:meth:`Kick.hand_over`; machine steps of ``dt``, s), is the model's to apply after the
+    others, at the start of its own work in the step, and not run here."""
 
     def __init__(self, effects: list[Effect], granules: GranuleKinematics, dt: float) -> None:
         self.kicks = [e for e in effects if isinstance(e, Kick)]
@@ -150,17 +151,13 @@ class KickRunner:
         return bool(self.kicks)
 
     def run(self, dt: float) -> None:
-        """Kick every granule over ``dt`` (internal time units)."""
+        """Kick every granule over ``dt`` (s)."""
         if self.granules.count == 0:
             return
-        velocities, positions, velocity_unit, length_unit = self.granules.read(
-            positions=self._positions
-        )
+        velocities, positions = self.granules.read(positions=self._positions)
         granules = Granules(
             np.ascontiguousarray(velocities),  # the kernel's own array; a rigid read's copy
             None if positions is None else np.ascontiguousarray(positions),
-            velocity_unit,
-            length_unit,
             *self.granules.constants(),
         )
         for effect in self.kicks:
@@ -170,11 +167,11 @@ class KickRunner:
 
 class FloorKick(NamedTuple):
     """:class:`FloorFriction`'s kick as a contact model applies it (:meth:`Kick.hand_over`): at
-    the start of each machine step, ``floor_kick`` on its granules with ``dv_max`` (internal
-    velocity units) and the rotor's angular velocity at the step's start if ``corotating``
-    (else 0, the granules' velocities standing for their positions, as :class:`KickRunner`
-    gives them), which adds the energy it removed and the floor's work to ``energy`` (the
-    effect's counters, in place)."""
+    the start of each machine step, ``floor_kick`` on its granules with ``dv_max`` (m/s) and
+    the rotor's angular velocity at the step's start (rad/s) if ``corotating`` (else 0, the
+    granules' velocities standing for their positions, as :class:`KickRunner` gives them),
+    which adds the energy it removed and the floor's work to ``energy`` (the effect's counters,
+    J, in place)."""
 
     dv_max: float
     corotating: bool
@@ -182,14 +179,11 @@ class FloorKick(NamedTuple):
 
 
 class Granules(NamedTuple):
-    """The granules a kick changes: velocities (n, 2) and positions (n, 2) or None, C-contiguous,
-    in the contact model's units, the internal velocity and length units in those
-    (:class:`GranuleKinematics`), masses (kg), radii (m)."""
+    """The granules a kick changes: velocities (n, 2), m/s, and positions (n, 2), m, or None,
+    C-contiguous (:class:`GranuleKinematics`), masses (kg), radii (m)."""
 
     velocities: FloatArray
     positions: FloatArray | None
-    velocity_unit: float
-    length_unit: float
     masses: FloatArray
     radii: FloatArray
 
@@ -325,18 +319,16 @@ class FloorFriction(Kick):
 
     def __init__(self, machine: Machine, spec: FloorFrictionSpec) -> None:
         super().__init__()
-        self._deceleration = u.to_internal(spec.friction * spec.gravity, u.ACCELERATION)
+        self._deceleration = spec.friction * spec.gravity
+        """μ g, m/s²."""
         self._rotor = machine.rotor if spec.floor == "corotating" else None
         self.needs_positions = self._rotor is not None
 
     def kick(self, granules: Granules, dt: float) -> None:
         g = granules
-        omega = 0.0 if self._rotor is None else self._rotor.angular_velocity
+        omega = 0.0 if self._rotor is None else self._rotor.angular_velocity * u.ANGULAR_VELOCITY
         where = g.velocities if g.positions is None else g.positions  # unused without a rotor
-        floor_kick(
-            g.velocities, where, g.masses, self._deceleration * dt, omega, g.velocity_unit,
-            g.length_unit, self._energy,
-        )  # fmt: skip
+        floor_kick(g.velocities, where, g.masses, self._deceleration * dt, omega, self._energy)
 
     def hand_over(self, granules: GranuleKinematics, dt: float) -> bool:
         kick = FloorKick(self._deceleration * dt, self._rotor is not None, self._energy)
@@ -358,18 +350,8 @@ class AirDrag(Kick):
 
     def kick(self, granules: Granules, dt: float) -> None:
         s = self._spec
-        k = (
-            0.5
-            * s.air_density
-            * s.drag_coefficient
-            * 2
-            * granules.radii
-            * s.thickness
-            / granules.masses
-        ) / (1.0 / u.LENGTH)
-        _drag_kick(
-            granules.velocities, k * dt, granules.masses, granules.velocity_unit, self._energy
-        )
+        k = 0.5 * s.air_density * s.drag_coefficient * 2 * granules.radii * s.thickness
+        _drag_kick(granules.velocities, k / granules.masses * dt, granules.masses, self._energy)
 
 
 @numba.njit(cache=True, fastmath=False)
@@ -403,25 +385,20 @@ def floor_kick(
     m: FloatArray,
     dv_max: float,
     omega: float,
-    velocity_unit: float,
-    length_unit: float,
     energy: FloatArray,
 ) -> None:
-    """Floor friction on every granule in place (:class:`FloorFriction`): the velocity relative
-    to the floor (ω × x; ω = 0 for a stationary floor) loses at most ``dv_max`` of its length;
-    the energy removed and the floor's work, Σ over granules, are added to ``energy`` (2,)
-    (masses ``m`` in kg, ``v`` and ``x`` (n, 2), C-contiguous, in the units whose internal ones
-    are ``velocity_unit`` and ``length_unit``, everything else in internal units)."""
-    if velocity_unit == 1.0:  # a unit of 1 inlined: its divisions fold away (x / 1 is x)
-        removed, supplied = _floor_kicks(v, x, m, dv_max, omega, 1.0, length_unit)
-    else:
-        removed, supplied = _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit)
+    """Floor friction on every granule in place (:class:`FloorFriction`), SI: the velocity
+    ``v`` (n, 2), m/s, relative to the floor (ω × x for granules at ``x`` (n, 2), m; ω = 0,
+    rad/s, for a stationary floor) loses at most ``dv_max`` (m/s) of its length; the energy
+    removed and the floor's work, Σ over granules (masses ``m``, kg), are added to ``energy``
+    (2,), J. ``v`` and ``x`` C-contiguous."""
+    removed, supplied = _floor_kicks(v, x, m, dv_max, omega)
     energy[0] += removed
     energy[1] += supplied
 
 
 @numba.njit(fastmath=False, inline="always")
-def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
+def _floor_kicks(v, x, m, dv_max, omega):
     """:func:`floor_kick` (its arguments but energy; returns the two sums) in two loops: the
     kicks, over flat views and with selects for the granules at rest relative to the floor,
     which the compiler vectorises (IEEE division and square root are exact per lane: the same
@@ -433,20 +410,19 @@ def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
     removed_each = np.empty(n)
     supplied_each = np.empty(n)
     for i in range(n):
-        fx = -omega * (xf[2 * i + 1] / length_unit)
-        fy = omega * (xf[2 * i] / length_unit)
-        rx = vf[2 * i] / velocity_unit - fx
-        ry = vf[2 * i + 1] / velocity_unit - fy
+        fx = -omega * xf[2 * i + 1]
+        fy = omega * xf[2 * i]
+        rx = vf[2 * i] - fx
+        ry = vf[2 * i + 1] - fy
         speed = math.sqrt(rx * rx + ry * ry)
         moving = speed > 0.0
         scale = 1.0 - min(dv_max, speed) / (speed if moving else 1.0)
         ax = rx * scale
         ay = ry * scale
-        vf[2 * i] = (fx + ax) * velocity_unit if moving else vf[2 * i]
-        vf[2 * i + 1] = (fy + ay) * velocity_unit if moving else vf[2 * i + 1]
-        mass = m[i] / MASS
-        removed = 0.5 * mass * (speed * speed - (ax * ax + ay * ay))
-        supplied = mass * ((ax - rx) * fx + (ay - ry) * fy)
+        vf[2 * i] = fx + ax if moving else vf[2 * i]
+        vf[2 * i + 1] = fy + ay if moving else vf[2 * i + 1]
+        removed = 0.5 * m[i] * (speed * speed - (ax * ax + ay * ay))
+        supplied = m[i] * ((ax - rx) * fx + (ay - ry) * fy)
         removed_each[i] = removed if moving else -0.0
         supplied_each[i] = supplied if moving else -0.0
     removed = 0.0
@@ -458,25 +434,21 @@ def _floor_kicks(v, x, m, dv_max, omega, velocity_unit, length_unit):
 
 
 @numba.njit(cache=True, fastmath=False)
-def _drag_kick(
-    v: FloatArray, k_dt: FloatArray, m: FloatArray, velocity_unit: float, energy: FloatArray
-) -> None:
-    """Quadratic drag on every granule in place (:class:`AirDrag`): |v'| = |v|/(1 + k|v|dt),
-    ``k_dt`` = k·dt per granule; adds the energy removed to ``energy[0]`` (masses ``m`` in kg,
-    ``v`` in the units whose internal one is ``velocity_unit``, everything else in internal
-    units)."""
+def _drag_kick(v: FloatArray, k_dt: FloatArray, m: FloatArray, energy: FloatArray) -> None:
+    """Quadratic drag on every granule in place (:class:`AirDrag`), SI: |v'| = |v|/(1 + k|v|dt)
+    for the velocities ``v`` (n, 2), m/s, ``k_dt`` = k·dt per granule, 1/(m/s); adds the energy
+    removed to ``energy[0]``, J (masses ``m``, kg)."""
     removed = 0.0
-    scaled = velocity_unit != 1.0  # as in floor_kick
     for i in range(v.shape[0]):
-        vx = v[i, 0] / velocity_unit if scaled else v[i, 0]
-        vy = v[i, 1] / velocity_unit if scaled else v[i, 1]
+        vx = v[i, 0]
+        vy = v[i, 1]
         speed = math.sqrt(vx * vx + vy * vy)
         if speed > 0.0:
             after = speed / (1.0 + k_dt[i] * speed)
             ratio = after / speed
-            v[i, 0] = (vx * ratio) * velocity_unit if scaled else vx * ratio
-            v[i, 1] = (vy * ratio) * velocity_unit if scaled else vy * ratio
-            removed += 0.5 * (m[i] / MASS) * (speed * speed - after * after)
+            v[i, 0] = vx * ratio
+            v[i, 1] = vy * ratio
+            removed += 0.5 * m[i] * (speed * speed - after * after)
     energy[0] += removed
 
 

@@ -18,7 +18,6 @@ from perga.contact.soft.polygon_set import (
     contact_table,
     polygon_set,
 )
-from perga.machine import units as u
 from perga.machine.effects import FloorKick
 
 from .test_polygons import _box, _hexagon
@@ -104,12 +103,11 @@ def test_plain_tuples_for_advance_follow_the_field_order():
 
 def test_the_opening_follows_the_field_order():
     """``granules.opening_of`` builds ``kernel.Opening`` by position: the kick's step, the rotor's
-    ω only for a co-rotating floor, the units, the effect's own counters, the log's arrays."""
+    ω only for a co-rotating floor, the effect's own counters, the log's arrays."""
     energy = np.zeros(2)
     kept = (np.zeros((3, 2)), np.zeros((3, 2)), np.zeros(3), np.zeros((4, 2)), np.zeros((1, 2)))
     named = kernel.Opening(*opening_of((FloorKick(0.25, True, energy), 7.0), kept))
     assert (named.dv_max, named.omega, named.corotating, named.keep) == (0.25, 7.0, True, True)
-    assert (named.velocity_unit, named.length_unit) == (u.VELOCITY, u.LENGTH)
     assert named.energy is energy
     assert all(a is b for a, b in zip(named.kept, kept, strict=True))
     named = kernel.Opening(*opening_of((FloorKick(0.25, False, energy), 7.0), None))

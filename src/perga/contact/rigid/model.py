@@ -61,11 +61,12 @@ class _Kinematics:
     def constants(self) -> tuple[FloatArray, FloatArray]:
         return self._model.masses, self._model.radii
 
-    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
-        return (*self._model.writer().read_internal(positions=positions), 1.0, 1.0)
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        velocities, where = self._model.writer().read_internal(positions=positions)
+        return velocities * u.VELOCITY, None if where is None else where * u.LENGTH
 
     def write_velocities(self, velocities: FloatArray) -> None:
-        self._model.writer().write_internal_velocities(velocities)
+        self._model.writer().write_internal_velocities(velocities / u.VELOCITY)
 
     def take_floor_kick(self, kick: FloorKick) -> bool:
         return False  # the runner's batch read and write serve the bodies

@@ -33,7 +33,6 @@ from perga.contact.soft.polygon_set import (
 )
 from perga.contact.soft.threads import held_threads
 from perga.geometry.disc_polygon import bounding_radii, closest_feature
-from perga.machine import units as u
 
 if TYPE_CHECKING:
     from perga.machine.effects import FloorKick
@@ -73,8 +72,6 @@ def opening_of(floor: tuple[FloorKick, float] | None, kept: tuple[np.ndarray, ..
     return (
         0.0 if kick is None else kick.dv_max,
         float(omega) if kick is not None and kick.corotating else 0.0,
-        u.VELOCITY,
-        u.LENGTH,
         kick is not None and kick.corotating,
         _NO_KICK if kick is None else kick.energy,
         kept is not None,

@@ -263,16 +263,14 @@ class Settings(NamedTuple):
 
 class Opening(NamedTuple):
     """What a call does before its first step. The floor-friction kick if energy has two
-    entries (``perga.machine.effects.floor_kick`` on the granules, dv_max and omega in internal
-    units, velocity_unit and length_unit the internal units in SI; corotating False: the
-    velocities stand for the positions, as the effects' runner gives them), its removed and
-    supplied energy added to energy in place; then, if keep, the granules' x, v, w and the
-    polygons' vertices and com copied into kept (arrays of their shapes)."""
+    entries (``perga.machine.effects.floor_kick`` on the granules, dv_max in m/s and omega in
+    rad/s; corotating False: the velocities stand for the positions, as the effects' runner
+    gives them), its removed and supplied energy added to energy (J) in place; then, if keep,
+    the granules' x, v, w and the polygons' vertices and com copied into kept (arrays of their
+    shapes)."""
 
     dv_max: float
     omega: float
-    velocity_unit: float
-    length_unit: float
     corotating: bool
     energy: np.ndarray
     keep: bool
@@ -1003,10 +1001,7 @@ def _open(granules, m, poly, opening):
     polygons poly (``PolygonArrays``)."""
     if opening.energy.shape[0] == 2:
         where = granules.x if opening.corotating else granules.v
-        floor_kick(
-            granules.v, where, m, opening.dv_max, opening.omega, opening.velocity_unit,
-            opening.length_unit, opening.energy,
-        )  # fmt: skip
+        floor_kick(granules.v, where, m, opening.dv_max, opening.omega, opening.energy)
     if opening.keep:
         x, v, w, vertices, com = opening.kept
         _copy(granules.x, x)

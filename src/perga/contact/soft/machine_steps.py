@@ -28,6 +28,7 @@ from perga.contact.soft.granules import looks_for_coasting, pace_coasting
 from perga.contact.soft.machine import load_bodies, pose_polygons
 from perga.machine.energy import meter_step
 from perga.machine.machine import chipmunk_step, read_bodies
+from perga.machine.units import ANGULAR_VELOCITY
 
 CONTACT_CHANGES, RELEASES = kernel.COUNT_CONTACT_CHANGES, kernel.COUNT_RELEASES
 
@@ -80,7 +81,7 @@ def machine_steps(
     arrays, table, hist, polygon_loads, listed = polygons
     cstart, cpoly, list_vertices, list_reach = listed
     start, nbr, pair_hist, x_ref = nbrs
-    dv_max, _, velocity_unit, length_unit, corotating, energy, keep, kept = opening
+    dv_max, _, corotating, energy, keep, kept = opening
     coast_on, pacing = coasting
     watch_changes, watch_releases = watch
     counts = work[4]
@@ -103,8 +104,8 @@ def machine_steps(
             granules, props, bonds, params, walls,
             (arrays, table, hist, polygon_loads, (cstart, cpoly, list_vertices, list_reach)),
             (start, nbr, pair_hist, x_ref), work,
-            (dv_max, before[0, 5] if corotating else 0.0, velocity_unit, length_unit, corotating,
-             energy, keep, kept),
+            (dv_max, before[0, 5] * ANGULAR_VELOCITY if corotating else 0.0, corotating, energy,
+             keep, kept),
         )  # fmt: skip
         kernel_ticks += _ticks() - called
         start, nbr, pair_hist = out[0], out[1], out[2]

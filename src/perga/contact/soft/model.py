@@ -69,8 +69,8 @@ class _Kinematics:
     def constants(self) -> tuple[FloatArray, FloatArray]:
         return self._g.m, self._g.r
 
-    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None, float, float]:
-        return self._g.v, self._g.x if positions else None, u.VELOCITY, u.LENGTH
+    def read(self, *, positions: bool) -> tuple[FloatArray, FloatArray | None]:
+        return self._g.v, self._g.x if positions else None
 
     def write_velocities(self, velocities: FloatArray) -> None:
         if velocities is not self._g.v:
@@ -170,7 +170,7 @@ class SoftContacts:
         floor = self.floor
         self.granules.step(
             self.substeps,
-            floor=None if floor is None else (floor, machine.table[0, 5]),  # row 0: the rotor
+            floor=None if floor is None else (floor, machine.table[0, 5] * u.ANGULAR_VELOCITY),
             kept=None if self.log is None else self.log.kept(),
         )
         moment = self.polygons.apply_loads()
