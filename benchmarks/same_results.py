@@ -9,6 +9,8 @@ Both trees run the same case files (this tree's ``cases/``) in a fresh subproces
     python benchmarks/same_results.py --against HEAD~3            # every bundled scene, whole
     python benchmarks/same_results.py --against HEAD~3 --cases separator soft-separator
     python benchmarks/same_results.py --against HEAD~3 --seconds 0.05   # a shorter run of each
+    python benchmarks/same_results.py --against HEAD~3 --keep runs/same  # keep the runs: then
+    python benchmarks/compare_runs.py runs/same/separator/this runs/same/separator/other
 """
 
 from __future__ import annotations
@@ -43,7 +45,8 @@ def run(source: Path, case: Path, out: Path, seconds: float | None) -> float:
     env = {**os.environ, "PYTHONPATH": str(source)}
     start = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, "-m", "perga.cli", "run", str(case), "-o", str(out), "--quiet", *sets],
+        [sys.executable, "-m", "perga.cli", "run", str(case), "-o", str(out), "--quiet",
+         "--overwrite", *sets],
         env=env, capture_output=True, text=True, cwd=ROOT,
     )  # fmt: skip
     if done.returncode not in (0, 3):
@@ -82,14 +85,16 @@ def main() -> None:
     parser.add_argument("--against", required=True, help="the git ref to compare with")
     parser.add_argument("--cases", nargs="+", help="case names (default: every bundled scene)")
     parser.add_argument("--seconds", type=float, help="simulated seconds of every case")
+    parser.add_argument("--keep", type=Path, help="keep the runs in DIR/CASE/{this,other}")
     args = parser.parse_args()
     cases = [c for c in scenes() if args.cases is None or c.stem in args.cases]
     other = worktree(args.against)
     print(f"this tree against {args.against}; load average {os.getloadavg()[0]:.2f}")
     same = 0
-    with tempfile.TemporaryDirectory() as work:
+    with tempfile.TemporaryDirectory() as scratch:
+        work = args.keep or Path(scratch)
         for case in cases:
-            mine, theirs = Path(work) / case.stem / "this", Path(work) / case.stem / "other"
+            mine, theirs = work / case.stem / "this", work / case.stem / "other"
             wall_mine = run(ROOT / "src", case, mine, args.seconds)
             wall_theirs = run(other, case, theirs, args.seconds)
             differ = differences(mine, theirs)

@@ -12,6 +12,7 @@ from perga.analytic.common import reduced_mass
 from perga.analytic.impact import (
     HingedImpact,
     centre_of_percussion,
+    free_effective_mass,
     hinged_effective_mass,
     hinged_impact,
     impact_efficiencies,
@@ -623,3 +624,19 @@ def test_impact_results_are_frozen() -> None:
     for result in results:
         with pytest.raises(FrozenInstanceError):
             result.dissipated = 0.0  # type: ignore[misc]
+
+
+def test_free_effective_mass_is_the_struck_points_response() -> None:
+    """A unit impulse J along n at r from the centre of mass of a free body changes the point's
+    normal velocity by J/M + (r × n)² J/I_C (the body's translation plus its rotation): the
+    effective mass J/Δv, for the normal perpendicular to r, is free_effective_mass's (to
+    round-off, 1e-15); an impact through the centre of mass sees the whole mass."""
+    M, I_C, arm = 0.2, 3e-4, 0.04
+    n, r = np.array([0.0, 1.0]), np.array([arm, 0.0])
+    dv_centre = n / M
+    dw = (r[0] * n[1] - r[1] * n[0]) / I_C
+    dv_point = dv_centre + dw * np.array([-r[1], r[0]])
+    assert free_effective_mass(M, I_C, arm) == pytest.approx(1.0 / (dv_point @ n), rel=1e-15)
+    assert free_effective_mass(M, I_C, 0.0) == M
+    with pytest.raises(ValueError, match="I_C"):
+        free_effective_mass(M, 0.0, arm)

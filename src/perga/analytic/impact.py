@@ -174,6 +174,20 @@ def hinged_effective_mass(I_A: float, d: float) -> float:
     return I_A / d_squared if d_squared > 0.0 else math.inf
 
 
+def free_effective_mass(M: float, I_C: float, arm: float) -> float:
+    """Smallest effective mass a free rigid body offers an impact at a point ``arm`` (m) from
+    its centre of mass, along the normal perpendicular to the arm: M/(1 + M·arm²/I_C) (kg).
+
+    M: mass (kg, > 0); I_C: moment of inertia about the centre of mass (kg·m², > 0). Source: the
+    impulse-momentum relations of a free body, 1/M_eff = 1/M + (r × n)²/I_C (Stronge, Impact
+    Mechanics (2000)), largest (r × n)² = arm²."""
+    _check_mass("M", M)
+    if not 0.0 < I_C < math.inf:
+        raise ValueError(f"I_C must be finite and > 0 kg·m² (got {I_C})")
+    _check_finite("arm", arm, "m")
+    return M / (1.0 + M * arm**2 / I_C)
+
+
 def centre_of_percussion(M: float, I_A: float, l_cg: float) -> float:
     """Distance from the hinge to the centre of percussion: q = I_A/(M·l_cg) (m).
 

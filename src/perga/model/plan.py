@@ -19,6 +19,7 @@ import numpy as np
 
 from perga.analytic.common import reduced_mass
 from perga.analytic.contact import mindlin_ratio, tunnelling_time_step
+from perga.analytic.impact import free_effective_mass, hinged_effective_mass
 from perga.case.schema import Case, ExplicitPlacement, ShotPlacement
 from perga.model.hammer_geometry import hammer_geometry
 from perga.model.parts import chamber_geometry
@@ -56,18 +57,17 @@ def thinnest_obstacle(case: Case) -> float:
 
 def hammer_effective_mass(case: Case) -> float:
     """Smallest effective mass a hammer offers a granule's impact, kg: I_A/tip² for a hinged
-    hammer struck at its tip, M/(1 + Mρ²/I_C) for a free one struck at its farthest point from
-    the centre of mass (ρ), and infinite for a welded one (the rotor's inertia). The hinged one
-    is :func:`perga.analytic.impact.hinged_effective_mass`'s I_A/d² but for the square: tip**2
-    here, d·d there, which differ by an ulp for 1 in 1,200 numbers, and the steps with them."""
+    hammer struck at its tip (:func:`~perga.analytic.impact.hinged_effective_mass`), the free
+    one's struck at its farthest point from the centre of mass
+    (:func:`~perga.analytic.impact.free_effective_mass`), and infinite for a welded one (the
+    rotor's inertia)."""
     h, g = case.hammers, hammer_geometry(case)
     if h.mount == "hinged":
-        return g.moment_about_hinge / g.tip**2
+        return hinged_effective_mass(g.moment_about_hinge, g.tip)
     if h.mount == "free":
         cx, cy = g.centre_of_mass
         arm = max(math.hypot(x - cx, y - cy) for x, y in g.outline)
-        moment = g.moment_about_hinge - g.mass * (cx * cx + cy * cy)
-        return g.mass / (1.0 + g.mass * arm**2 / moment)
+        return free_effective_mass(g.mass, g.moment_about_hinge - g.mass * (cx * cx + cy * cy), arm)
     return math.inf
 
 
