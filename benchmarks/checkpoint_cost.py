@@ -89,7 +89,7 @@ def main() -> None:
         for name in args.cases:
             case = load_case(Path("cases") / f"{name}.toml")
             sim = Simulation(compile_case(case))
-            with sim.contacts.running():
+            with sim.running():
                 for _ in range(args.steps):
                     sim.step()
                 step = median_time(sim.step, 200)

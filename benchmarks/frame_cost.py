@@ -46,7 +46,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as out:
         write_scene(Path(out), spec)
         recorders = make_recorders(case.output.record, Path(out), spec, case.output.granule_table)
-        with sim.contacts.running():
+        with sim.running():
             for _ in range(args.frames):
                 sim.run(args.steps * sim.dt)
                 frame = timed("Simulation.frame", sim.frame, contacts="vtk" in case.output.record)

@@ -32,7 +32,7 @@ def main() -> None:
             continue  # a parameter set, not a scene
         sim = Simulation(compile_case(case))
         rows = []
-        with sim.contacts.running():
+        with sim.running():
             for t in (1e-4, 0.001, 0.01, case.solver.duration):
                 if t > case.solver.duration + 1e-12:
                     continue

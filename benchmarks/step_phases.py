@@ -27,6 +27,7 @@ import numpy as np
 from perga.case import load_case
 from perga.contact.soft.model import ANGULAR_IMPULSE
 from perga.engine.simulation import Simulation
+from perga.machine import units as u
 from perga.model.compile import compile_case
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,12 +45,12 @@ def phased_step(sim: Simulation, timers: dict[str, float]) -> None:
     c = sim.contacts
     end = (sim.steps + 1) * sim.dt
     if sim.kicks is not None:
-        timed("kicks", sim.kicks.run, sim._dt_internal)
+        timed("kicks", sim.kicks.run, sim.dt)
     before = timed("machine reads", sim.machine.state)
     if hasattr(c, "polygons"):  # soft: the parts of before_machine_step
         timed("pose", c.polygons.pose, c.granule_dt, before)
         kept = None if c.log is None else timed("impact log", c.log.kept)
-        floor = None if c.floor is None else (c.floor, before.table[0, 5])
+        floor = None if c.floor is None else (c.floor, before.table[0, 5] * u.ANGULAR_VELOCITY)
         timed("kernel", lambda: c.granules.step(c.substeps, floor=floor, kept=kept))
         moment = timed("loads", c.polygons.apply_loads)
         c._moment = moment * c._machine_dt / ANGULAR_IMPULSE
@@ -83,7 +84,7 @@ def main() -> None:
     sim = Simulation(spec)
     sim.run(args.start)
     timers: dict[str, float] = {}
-    with sim.contacts.running():  # as perga run holds it
+    with sim.running():  # as perga run holds it
         for _ in range(args.steps):
             phased_step(sim, timers)
     total = sum(timers.values())

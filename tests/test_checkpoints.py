@@ -184,7 +184,7 @@ def test_a_soft_simulation_goes_on_from_its_checkpoint_bit_for_bit(case):
     round trip through a checkpoint changes nothing (the rigid engine's does change the order
     in which Chipmunk solves contacts: module doc of perga.run.checkpoints)."""
     sim = Simulation(compile_case(load_case(ROOT / "cases" / case)))
-    with sim.contacts.running():
+    with sim.running():
         for _ in range(2000):
             sim.step()
         copy, _ = checkpoints.read(checkpoints.dump(sim, {}, Path("run"), "case"))

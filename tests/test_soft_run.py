@@ -179,7 +179,7 @@ def hammer_restitution(model: str, e: float, end: str, mass: float) -> float:
     sets = [f"hammers.mass={mass}", f"contacts[0].restitution={e}", f'contact_model.end="{end}"',
             f'contact_model.kind="{model}"', "contact_model.granule_substeps=1"]  # fmt: skip
     sim = Simulation(compile_case(load_case(SOFT, overrides=sets)), track_energy=False)
-    with sim.contacts.running():
+    with sim.running():
         while not sim.impacts and sim.time < 0.05:
             sim.step()
     first = sim.impacts[0]

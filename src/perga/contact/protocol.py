@@ -22,9 +22,9 @@ A model may take several whole steps in one compiled call instead
 Between steps the process (a feed, an outlet, damage) may add and remove granules; each has a
 persistent number (its id), which impacts, releases and frames name.
 
-Everything is in SI at this interface except the kicks' arrays and that angular impulse, which
-are in Chipmunk's internal units (:mod:`perga.machine.units`), as the effects and the meter
-compute in them.
+Everything is in SI at this interface except the machine's states and that angular impulse,
+which are in Chipmunk's internal units (:mod:`perga.machine.units`), as the machine and its
+energy meter compute in them.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ def _twins(case: Path, *overrides: str, **options) -> tuple[Simulation, Simulati
 
 
 def _one_by_one(sim: Simulation, duration: float) -> None:
-    with sim.contacts.running():
+    with sim.running():
         for _ in range(round(duration / sim.dt)):
             sim.step()
 
@@ -55,7 +55,7 @@ def _batches(sim: Simulation, duration: float, limit: int) -> list[tuple[int, bo
     counts = sim.contacts.granules.counts
     end = sim.steps + round(duration / sim.dt)
     out = []
-    with sim.contacts.running():
+    with sim.running():
         while sim.steps < end:
             changes = counts[COUNT_CONTACT_CHANGES]
             n = sim.advance(min(limit, end - sim.steps))
@@ -165,5 +165,5 @@ def test_steps_that_need_python_are_taken_one_at_a_time(case, overrides) -> None
     on threads, the rigid model's collision handlers), advance takes one step a call."""
     spec = compile_case(load_case(CASES / case, overrides=list(overrides)))
     sim = Simulation(spec)
-    with sim.contacts.running():
+    with sim.running():
         assert [sim.advance(50) for _ in range(5)] == [1] * 5
