@@ -49,11 +49,11 @@ def main(argv: list[str] | None = None) -> int:
         for _ in range(20):
             sim.step()
         reader = BodyReader(sim.machine.space, sim.contacts.bodies.granule_bodies)
-        state = reader.read()
+        positions, velocities, spins = reader.read()
         granules = sim.frame().granules
-        assert np.array_equal(state.positions, granules.positions)
-        assert np.array_equal(state.velocities, granules.velocities)
-        assert np.array_equal(state.angular_velocities, granules.angular_velocities)
+        assert np.array_equal(positions, granules.positions)
+        assert np.array_equal(velocities, granules.velocities)
+        assert np.array_equal(spins, granules.angular_velocities)
         bodies = sim.contacts.bodies.granule_bodies
 
         def loop(bodies: list = bodies) -> None:
