@@ -1,8 +1,9 @@
-"""Issue 15, item 2: the energy ledger's residual from the soft kernel's granule substeps (the
-hammers posed at their step-start velocity through them) when a hammer strikes a granule held
-in the comb: the bundled bee-bread separator cut to one comb cell, no feed or outlet, struck
-once in its first 12 ms, at 5 and 1 granule substeps and three steps; then the whole case's
-closure at 0.3 s for 5, 2 and 1 substeps (``--full``).
+"""The energy ledger's residual from the soft kernel's granule substeps when a hammer strikes a
+granule held in the comb: the bundled bee-bread separator cut to one comb cell, no feed or
+outlet, struck once in its first 12 ms, at 5 and 1 granule substeps and three steps; then the
+whole case's closure at 0.3 s for 5, 2 and 1 substeps (``--full``). With the hammers at their
+step-start velocity through the substeps the residual was first order in the machine step;
+kicked at every granule step, it is that of one substep (docs/reliability.md).
 
     python benchmarks/substep_split.py          # ~10 s
     python benchmarks/substep_split.py --full   # ~2 min more

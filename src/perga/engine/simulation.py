@@ -14,7 +14,8 @@ Step order of :meth:`Simulation.step` (one machine step dt, t_n -> t_{n+1}; dt =
    machine moves (:meth:`~perga.contact.protocol.ContactModel.before_machine_step`): rigid,
    nothing moves yet (the granules are bodies of the space: their velocities are read for the
    dissipation); soft, the kernel advances the granules over the step against the hammers
-   posed ahead and loads the hammer bodies with the mean contact force.
+   posed ahead (kicked by each granule step's loads) and loads the hammer bodies with the mean
+   contact force, moving them by their recoil within the step.
 3. The energy meter keeps that state (the rotor-driven bodies' velocities).
 4. Chipmunk's step of the space: positions and angles advance with the current velocities
    (the kinematic rotor turns by ω·dt), collision detection at the new positions (rigid

@@ -32,7 +32,7 @@ from pymunk._chipmunk import ffi, lib
 # 0 velocity_func, 1 position_func, 2 m, 3 m_inv, 4 i, 5 i_inv, 6-7 cog, 8-9 p, 10-11 v,
 # 12-13 f, 14 a, 15 w, 16 t, 17-22 transform (a b c d tx ty)
 _BODY = slice(2, 23)
-_M, _I, _COG, _V, _F, _A, _W, _T, _TX = 2, 4, 6, 10, 12, 14, 15, 16, 21
+_M, _I, _COG, _P, _V, _F, _A, _W, _T, _TX = 2, 4, 6, 8, 10, 12, 14, 15, 16, 21
 # cpConstraint is 13 doubles (6 pointers, maxForce, errorBias, maxBias, cpBool padded, 3
 # pointers); each joint's own fields follow it
 _MAX_FORCE = 6
@@ -143,10 +143,13 @@ def restore(space: pymunk.Space, state: ChipmunkState) -> None:
         raise ValueError("the state holds more joint impulses than the space has joints")
 
 
-VIEW_V, VIEW_F, VIEW_ANGLE, VIEW_W, VIEW_T = (k - _BODY.start for k in (_V, _F, _A, _W, _T))
+VIEW_P, VIEW_V, VIEW_F, VIEW_ANGLE, VIEW_W, VIEW_T = (
+    k - _BODY.start for k in (_P, _V, _F, _A, _W, _T)
+)
 VIEW_TRANSFORM = _TX - 4 - _BODY.start
-"""Index in a :class:`BodyViews` view of each field's first double: velocity (2), force (2),
-angle, angular velocity, torque, transform (6: a b c d tx ty)."""
+"""Index in a :class:`BodyViews` view of each field's first double: the centre of gravity's
+position p (2), velocity (2), force (2), angle, angular velocity, torque, transform (6: a b c d
+tx ty)."""
 
 
 @intrinsic

@@ -42,6 +42,7 @@ from perga.machine import units as u
 from perga.machine.chipmunk_state import (
     VIEW_ANGLE,
     VIEW_F,
+    VIEW_P,
     VIEW_T,
     VIEW_TRANSFORM,
     VIEW_V,
@@ -292,6 +293,20 @@ def write_loads(addresses: NDArray[np.uint64], loads: FloatArray) -> None:
         raw[VIEW_F] = loads[j, 0]
         raw[VIEW_F + 1] = loads[j, 1]
         raw[VIEW_T] = loads[j, 2]
+
+
+@numba.njit(cache=True)
+def shift_bodies(addresses: NDArray[np.uint64], shifts: FloatArray) -> None:
+    """Move body j's centre of gravity and angle (the p and a of its struct at
+    ``addresses[j]``) by ``shifts[j]`` = (dx, dy, dangle), internal units, before a step:
+    Chipmunk's step then drifts the body from there (its transform follows p and a)."""
+    for j in range(addresses.size):
+        if shifts[j, 0] == 0.0 and shifts[j, 1] == 0.0 and shifts[j, 2] == 0.0:
+            continue
+        raw = doubles_at(addresses[j], VIEW_WIDTH)
+        raw[VIEW_P] += shifts[j, 0]
+        raw[VIEW_P + 1] += shifts[j, 1]
+        raw[VIEW_ANGLE] += shifts[j, 2]
 
 
 def _rotate(x: float, y: float, angle: float) -> tuple[float, float]:

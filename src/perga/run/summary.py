@@ -94,9 +94,9 @@ def smaller_steps(system: System) -> str:
         return "take smaller steps (solver.dt, or solver.substeps)"
     if model.substeps > 1:
         return (
-            "take smaller machine steps (contact_model.granule_substeps = 1: the hammers keep "
-            "their velocity through the granules' substeps, and that split's error grows with "
-            "how hard they are stopped)"
+            "take smaller steps (contact_model.steps_per_contact, solver.dt, or fewer "
+            "contact_model.granule_substeps: the machine's own forces, hinges and drive, act "
+            "once per machine step)"
         )
     return "take smaller steps (contact_model.steps_per_contact, or solver.dt)"
 

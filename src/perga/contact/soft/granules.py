@@ -526,10 +526,10 @@ class SoftGranules:
         ``tests/contact/soft/test_bundles.py`` checks the order)."""
         polygons = (
             (p.vertices, p.start, p.com, p.velocity, p.omega, p.kind, p.mass, p.inertia, p.pivot,
-             p.mat, p.solid, p.corner),
+             p.mat, p.solid, p.corner, p.body),
             (t.law, t.k_n, t.k_t, t.damping, t.friction, t.clamp, t.damping_t),
             self.polygon_hist,
-            (p.force, p.torque, p.moment),
+            (p.force, p.torque, p.moment, p.recoil),
             self._listed,
         )  # fmt: skip
         return (

@@ -47,13 +47,22 @@ normal runs have drag = 0,
 v_cap = inf.
 
 Polygons (hammers, ``perga.contact.soft.polygon_forces``): during a call of n steps each polygon
-moves rigidly from its pose at the call's first force evaluation with its (fixed) velocities: at
-step j (0-based) it is where ``polygon_forces.pose`` puts it j·dt later, the PINNED pivot moving
-with it. After the call the polygons hold the pose n·dt later (the granules' time) and the loads
-are the means over the call. Contacts are evaluated for a candidate list
-(``polygon_forces.candidates``), so that granules far from every polygon cost nothing per step;
-it is built after every neighbour-list rebuild with a margin of ``CANDIDATE_MARGIN`` skins,
-and the calls after keep it while the polygons stay within that margin (``advance``).
+moves rigidly from its pose at the call's first force evaluation, the PINNED pivot moving with
+it, and its body takes the granules' forces as they do: after each step's force evaluation the
+FREE and PINNED bodies are kicked by that step's loads (``polygon_forces.kick_bodies``) and
+drift on at their new velocities (``polygon_forces.pose`` from the pose of the last kick), so a
+hammer stopped by a granule recoils within the call, at the granules' step. After the call the
+polygons hold the pose n·dt later (the granules' time) and their velocities as they came in;
+the loads are the means over the call, and ``recoil`` how far the kicks of all steps but the
+last moved each body beyond its drift at those velocities: a machine step that drifts the
+body at its start velocities, adds the recoil and then kicks it by the mean loads follows the
+call exactly (a multiple-time-step split, as r-RESPA: Tuckerman, Berne & Martyna, J. Chem.
+Phys. 97, 1990 (1992)). With n = 1 nothing differs from a body at fixed velocities.
+
+Contacts with polygons are evaluated for a candidate list (``polygon_forces.candidates``), so
+that granules far from every polygon cost nothing per step; it is built after every
+neighbour-list rebuild with a margin of ``CANDIDATE_MARGIN`` skins, and the calls after keep it
+while the polygons stay within that margin (``advance``; checked again after a kick).
 
 Per-granule pass (``_integrate``): the granules that can reach a wall, have polygon candidates
 or are held (``mark_special``: at a call's first step, after every rebuild, and when the walls'
@@ -120,9 +129,11 @@ from perga.contact.soft.polygon_forces import (
     Candidates,
     Pose,
     add_loads,
+    add_recoil,
     candidate_reach,
     candidates,
     candidates_hold,
+    kick_bodies,
     polygon_contact,
     pose,
 )
@@ -873,10 +884,15 @@ def _advance(
     n_chunks = work.acc.shape[0]
     n_poly = force.shape[0]
     origin = Pose(poly.vertices.copy(), poly.com.copy(), poly.pivot.copy())
+    since = np.zeros(n_poly)
+    start_velocity, start_omega = poly.velocity.copy(), poly.omega.copy()
+    step_loads = np.zeros((n_poly, 3))
+    kicked = False
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
     force[:, :] = 0.0
     torque[:] = 0.0
     moment[:] = 0.0
+    loads.recoil[:, :] = 0.0
     chunk = np.zeros((n_chunks, 6))
     lost = np.zeros(n_chunks)
     cand = Candidates(np.zeros(n + 1, np.int64), np.zeros(0, np.int64), np.zeros((0, 4)))
@@ -929,7 +945,7 @@ def _advance(
         near = max(near, math.sqrt(dmax) + reach)
         if n_poly > 0:
             if step > 0:
-                pose(origin, poly, step * dt)
+                pose(origin, poly, step * dt, since)
             if not fresh:
                 candidate_reach(poly, rho, (n_steps - 1 - step) * dt, skin, dt, needed)
                 if (
@@ -969,7 +985,12 @@ def _advance(
             (wall_gap, flags, order[:n_special], free), near,
         )  # fmt: skip
         if n_poly > 0:
-            dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads)
+            dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads, step_loads)
+            if kick_bodies(poly, step_loads, dt, origin, since, step * dt):
+                kicked = True
+                fresh = False  # the candidates' reach was for the old velocities
+            if kicked and step < n_steps - 1:  # the last drift is the machine's next pose's
+                add_recoil(poly, start_velocity, start_omega, dt, loads.recoil)
         dmax = 0.0
         smax = 0.0
         umax = 0.0
@@ -988,7 +1009,10 @@ def _advance(
             umax = max(umax, maxima[step - first_coast, 2])
         need = 2.0 * math.sqrt(dmax) + dt * math.sqrt(smax) > skin
     if n_poly > 0 and n_steps > 0:
-        pose(origin, poly, n_steps * dt)
+        pose(origin, poly, n_steps * dt, since)
+        if kicked:  # the velocities are the call's inputs
+            poly.velocity[:, :] = start_velocity
+            poly.omega[:] = start_omega
         force /= n_steps
         torque /= n_steps
         moment /= n_steps

@@ -16,8 +16,11 @@ then drifts. Posing each hammer where Chipmunk's drift will put it one granule s
 (centre of gravity + v·dt, angle + ω·dt) and applying the mean contact force of the granule
 steps in the following Chipmunk step makes the two one kick-drift scheme: the force that kicks
 a hammer is evaluated at the position it then drifts from, as for the granules (derivation in
-docs/architecture.md). The joints' position correction (bias velocities, not exposed by
-Pymunk) is left out of the prediction: a pose error of the joint's drift, micrometres.
+docs/architecture.md). Within the granule steps of one machine step the kernel kicks the hammers
+by each step's loads; the recoil that gives them is added to the bodies' positions before
+Chipmunk's step (``apply_loads``). The joints' position correction (bias velocities, not
+exposed by Pymunk) is left out of the prediction: a pose error of the joint's drift,
+micrometres.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from perga.contact.soft.polygon_set import FREE, KINEMATIC, PINNED, PolygonSet, 
 from perga.geometry.pieces import piece_features
 from perga.geometry.polygon import counter_clockwise
 from perga.machine import units as u
-from perga.machine.machine import Machine, MachineState, write_loads
+from perga.machine.machine import Machine, MachineState, shift_bodies, write_loads
 
 TORQUE = u.FORCE * u.LENGTH
 """N·m per internal torque unit."""
@@ -115,6 +118,11 @@ class MachinePolygons:
         """Each hammer polygon's pivot in the rotor frame, m ((0, 0) unless hinged)."""
         self._loads = np.zeros((len(machine.bodies), 3))
         """Force and torque on each machine body, internal units (:meth:`apply_loads`)."""
+        self._shifts = np.zeros((len(machine.bodies), 3))
+        """Each machine body's recoil over the last call, internal units (:meth:`apply_loads`)."""
+        leaders = {int(row): k for k, row in reversed(list(enumerate(self._polygon_rows)))}
+        body = [leaders[int(row)] for row in self._polygon_rows]
+        body += range(n_hammer, len(relative))  # the wall's pieces never move
         self._body_addresses = machine.body_addresses
         self.polygons: PolygonSet = polygon_set(
             relative,
@@ -124,6 +132,7 @@ class MachinePolygons:
             inertia=inertia,
             mat=materials,
             features=(np.concatenate(solid), np.concatenate(corner)),
+            body=body,
         )
         self.pose(0.0, machine.state())
 
@@ -142,7 +151,11 @@ class MachinePolygons:
 
     def apply_loads(self) -> float:
         """Set the polygons' mean loads (from the last kernel call) as the bodies' force and
-        torque for the next Pymunk step; returns the mean moment about the axis on the hammers
+        torque for the next Pymunk step, and move the bodies by their recoil in the call (the
+        kernel kicks the hammers at every granule step but the last; Chipmunk drifts them at the
+        call's start velocities and kicks them with the mean loads: with the recoil added, the
+        step lands each hammer where the granule steps had it, a multiple-time-step split as in
+        r-RESPA, docs/architecture.md); returns the mean moment about the axis on the hammers
         the rotor drives, N·m."""
         return load_bodies(*self.load_arguments())
 
@@ -150,8 +163,8 @@ class MachinePolygons:
         """The arguments of :func:`load_bodies`, for :meth:`apply_loads`."""
         p = self.polygons
         return (
-            p.force, p.torque, p.moment, self._polygon_rows, self.machine, self._loads,
-            self._body_addresses(),
+            p.force, p.torque, p.moment, p.recoil, self._polygon_rows, self.machine, self._loads,
+            self._shifts, self._body_addresses(),
         )  # fmt: skip
 
 
@@ -201,26 +214,35 @@ def load_bodies(
     force: np.ndarray,
     torque: np.ndarray,
     moment: np.ndarray,
+    recoil: np.ndarray,
     polygon_rows: np.ndarray,
     driven: np.ndarray,
     out: np.ndarray,
+    shifts: np.ndarray,
     bodies: np.ndarray,
 ) -> float:
     """Sum the hammer polygons' mean loads (SI) onto their bodies' rows of ``out`` (k, 3:
     force x, y and torque, internal units) and write them into the bodies' structs at the
-    addresses ``bodies`` (``Machine.body_addresses``); returns the mean moment about the axis
-    of the polygons the rotor drives (``driven``, all polygons), N·m."""
+    addresses ``bodies`` (``Machine.body_addresses``); move each body by its polygons' recoil
+    (SI, the same for every polygon of a body; ``shifts`` (k, 3) takes it in internal units);
+    returns the mean moment about the axis of the polygons the rotor drives (``driven``, all
+    polygons), N·m."""
     out[:] = 0.0
+    shifts[:] = 0.0
     for i in range(polygon_rows.size):
         k = polygon_rows[i]
         out[k, 0] += force[i, 0]
         out[k, 1] += force[i, 1]
         out[k, 2] += torque[i]
+        shifts[k, 0] = recoil[i, 0] / LENGTH
+        shifts[k, 1] = recoil[i, 1] / LENGTH
+        shifts[k, 2] = recoil[i, 2]
     for k in range(out.shape[0]):
         out[k, 0] /= FORCE
         out[k, 1] /= FORCE
         out[k, 2] /= TORQUE
     write_loads(bodies, out)
+    shift_bodies(bodies, shifts)
     total = 0.0
     for i in range(driven.size):
         if driven[i]:

@@ -73,6 +73,7 @@ from perga.contact.soft.polygon_set import (
     HIST_SLIP,
     HIST_TANGENTIAL_IMPULSE,
     HIST_XI,
+    KINEMATIC,
     PINNED,
     ContactTable,
     PolygonSet,
@@ -119,14 +120,16 @@ class Candidates(NamedTuple):
 
 
 @nb.njit(cache=True, fastmath=FASTMATH)
-def pose(origin, poly, t):
-    """Pose the polygons ``poly`` (``PolygonArrays``) t seconds after the pose ``origin``
-    (``Pose``) by rigid motion at their velocities: c(t) = c0 + v_c t, vertices and pivot turned
-    by ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
+def pose(origin, poly, time, since):
+    """Pose the polygons ``poly`` (``PolygonArrays``) at ``time`` s (from the call's start) by
+    rigid motion at their velocities from the pose ``origin`` (``Pose``) they had at
+    ``since[k]`` s: with t = time − since[k], c(t) = c0 + v_c t, vertices and pivot turned by
+    ω t about c0 and moved by v_c t. Writes poly's vertices, com and pivot."""
     verts0, com0, pivot0 = origin.vertices, origin.com, origin.pivot
     verts, start, com, vel = poly.vertices, poly.start, poly.com, poly.velocity
     omega, pivot = poly.omega, poly.pivot
     for k in range(com.shape[0]):
+        t = time - since[k]
         c = math.cos(omega[k] * t)
         s = math.sin(omega[k] * t)
         cx = com0[k, 0] + vel[k, 0] * t
@@ -419,9 +422,10 @@ def candidates(x_ref, r, poly, rho, hist, reach):
 
 
 @nb.njit(cache=True)
-def add_loads(cand, com, loads):
+def add_loads(cand, com, loads, step):
     """Add one step's polygon loads ``cand.loads`` (``Candidates``) to ``loads``
-    (``PolygonLoads``) and return the energy the step's contacts dissipated, J.
+    (``PolygonLoads``), write them per polygon into ``step`` (n_poly, 3: force x, y, N; torque
+    about the centre of mass, N·m) and return the energy the step's contacts dissipated, J.
 
     Summed in entry order (independent of the thread count); moment = torque + com × force about
     the origin at this step's com (n_poly, 2), m.
@@ -429,7 +433,7 @@ def add_loads(cand, com, loads):
     cpoly, ploads = cand.polygon, cand.loads
     force, torque, moment = loads.force, loads.torque, loads.moment
     n_poly = com.shape[0]
-    step = np.zeros((n_poly, 3))
+    step[:, :] = 0.0
     dissipated = 0.0
     for e in range(cpoly.shape[0]):
         k = cpoly[e]
@@ -443,6 +447,69 @@ def add_loads(cand, com, loads):
         torque[k] += step[k, 2]
         moment[k] += step[k, 2] + com[k, 0] * step[k, 1] - com[k, 1] * step[k, 0]
     return dissipated
+
+
+@nb.njit(cache=True)
+def kick_bodies(poly, step, dt, origin, since, time):
+    """Kick the movable bodies of the polygons ``poly`` (``PolygonArrays``) by one step's loads
+    ``step`` (``add_loads``') over dt s, and move the pose origin (``Pose`` ``origin``,
+    ``since``) of each kicked polygon to its pose now, ``time`` s; returns whether any was
+    kicked. A FREE body takes Δv = F dt/M, Δω = τ_c dt/I_c; a PINNED one Δω = τ_A dt/I_A about
+    its pivot A (τ_A = τ_c + (c − A) × F) and its centre's velocity Δω × (c − A); a KINEMATIC
+    one (or infinite inertia) none. The body's loads are the sums over its polygons
+    (``PolygonSet.body``)."""
+    body, kind, com, pivot = poly.body, poly.kind, poly.com, poly.pivot
+    n_poly = com.shape[0]
+    total = np.zeros((n_poly, 3))
+    for k in range(n_poly):
+        b = body[k]
+        total[b, 0] += step[k, 0]
+        total[b, 1] += step[k, 1]
+        total[b, 2] += step[k, 2]
+    kick = np.zeros((n_poly, 3))
+    any_kick = False
+    for b in range(n_poly):
+        if body[b] != b or kind[b] == KINEMATIC:
+            continue
+        fx, fy, tq = total[b, 0], total[b, 1], total[b, 2]
+        if fx == 0.0 and fy == 0.0 and tq == 0.0:
+            continue
+        if kind[b] == FREE:
+            kick[b, 0] = fx * dt / poly.mass[b]
+            kick[b, 1] = fy * dt / poly.mass[b]
+            kick[b, 2] = tq * dt / poly.inertia[b]
+        else:
+            rx, ry = com[b, 0] - pivot[b, 0], com[b, 1] - pivot[b, 1]
+            dw = (tq + rx * fy - ry * fx) * dt / poly.inertia[b]
+            kick[b, 0], kick[b, 1], kick[b, 2] = -dw * ry, dw * rx, dw
+        any_kick = True
+    if not any_kick:
+        return False
+    for k in range(n_poly):
+        b = body[k]
+        if kick[b, 0] == 0.0 and kick[b, 1] == 0.0 and kick[b, 2] == 0.0:
+            continue
+        for q in range(poly.start[k], poly.start[k + 1]):
+            origin.vertices[q, 0] = poly.vertices[q, 0]
+            origin.vertices[q, 1] = poly.vertices[q, 1]
+        origin.com[k, 0], origin.com[k, 1] = com[k, 0], com[k, 1]
+        origin.pivot[k, 0], origin.pivot[k, 1] = pivot[k, 0], pivot[k, 1]
+        since[k] = time
+        poly.velocity[k, 0] += kick[b, 0]
+        poly.velocity[k, 1] += kick[b, 1]
+        poly.omega[k] += kick[b, 2]
+    return True
+
+
+@nb.njit(cache=True)
+def add_recoil(poly, start_velocity, start_omega, dt, recoil):
+    """Add to ``recoil`` (n_poly, 3: m, m, rad) one step's drift of the polygons ``poly``
+    (``PolygonArrays``) beyond their drift at the call's start velocities ``start_velocity``
+    (n_poly, 2), m/s, and ``start_omega`` (n_poly,), rad/s, over dt s."""
+    for k in range(recoil.shape[0]):
+        recoil[k, 0] += (poly.velocity[k, 0] - start_velocity[k, 0]) * dt
+        recoil[k, 1] += (poly.velocity[k, 1] - start_velocity[k, 1]) * dt
+        recoil[k, 2] += (poly.omega[k] - start_omega[k]) * dt
 
 
 @nb.njit(cache=True, parallel=True, fastmath=FASTMATH)

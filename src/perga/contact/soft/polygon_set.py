@@ -74,15 +74,17 @@ class PolygonArrays(NamedTuple):
     mat: np.ndarray
     solid: np.ndarray
     corner: np.ndarray
+    body: np.ndarray
 
 
 class PolygonLoads(NamedTuple):
     """Loads on the polygons (``PolygonSet`` doc): force (n_poly, 2), N; torque about the centre
-    of mass and moment about the origin (n_poly,), N·m."""
+    of mass and moment about the origin (n_poly,), N·m; recoil (n_poly, 3): m, m, rad."""
 
     force: np.ndarray
     torque: np.ndarray
     moment: np.ndarray
+    recoil: np.ndarray
 
 
 class TableArrays(NamedTuple):
@@ -116,10 +118,17 @@ class PolygonSet:
     convex corner this polygon owns (a contact there counts while the disc centre is in the
     corner's region, between the two edges' normals); ``SMOOTH_JOINT``, a concave joint turning
     by less than ``SMOOTH_TURN`` (a face's contact there counts only on the face's side of the
-    joint's bisector); 0 otherwise (−1, −1, 0 off the outline).
+    joint's bisector); 0 otherwise (−1, −1, 0 off the outline);
+    body (n_poly,) int64: the first polygon of polygon k's body: polygons of one body share its
+    centre of mass, velocities, kind, mass, inertia and pivot, and move as one when the
+    contacts kick the body inside a call (``kernel`` doc).
     Loads on each polygon: force (n_poly, 2), N; torque (n_poly,) about com, N·m; moment
     (n_poly,) about the world origin (0, 0), N·m. ``polygon_contacts`` adds to them (zero them
-    with ``clear_loads`` first); ``SoftGranules.step`` sets them to the mean over its call.
+    with ``clear_loads`` first); ``SoftGranules.step`` sets them to the mean over its call, and
+    recoil (n_poly, 3) to how far (m, m, rad) the contacts' kicks inside the call moved the
+    body's centre of mass and angle beyond its motion at the call's start velocities, less the
+    last step's share (what a machine step that drifts the body at those velocities and then
+    kicks it with the mean loads must add to its position to follow the call, ``kernel`` doc).
 
     Update the pose in place before each force evaluation or call (``set_pose``), e.g. from
     Pymunk's ``body.local_to_world`` of the shape's local vertices, ``body.position`` (plus the
@@ -138,15 +147,18 @@ class PolygonSet:
     mat: np.ndarray
     solid: np.ndarray
     corner: np.ndarray
+    body: np.ndarray
     force: np.ndarray = field(init=False)
     torque: np.ndarray = field(init=False)
     moment: np.ndarray = field(init=False)
+    recoil: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
         n_poly = self.com.shape[0]
         self.force = np.zeros((n_poly, 2))
         self.torque = np.zeros(n_poly)
         self.moment = np.zeros(n_poly)
+        self.recoil = np.zeros((n_poly, 3))
 
     @property
     def n_poly(self) -> int:
@@ -189,6 +201,7 @@ class PolygonSet:
             self.mat,
             self.solid,
             self.corner,
+            self.body,
         )
 
     def outline(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -197,8 +210,8 @@ class PolygonSet:
         return self.vertices, self.start, self.solid, self.corner
 
     def loads(self) -> PolygonLoads:
-        """(force, torque, moment), the load arrays the compiled functions write."""
-        return PolygonLoads(self.force, self.torque, self.moment)
+        """(force, torque, moment, recoil), the load arrays the compiled functions write."""
+        return PolygonLoads(self.force, self.torque, self.moment, self.recoil)
 
 
 def polygon_set(
@@ -213,6 +226,7 @@ def polygon_set(
     omega: np.ndarray | None = None,
     mat: list[int] | np.ndarray | None = None,
     features: tuple[np.ndarray, np.ndarray] | None = None,
+    body: list[int] | np.ndarray | None = None,
 ) -> PolygonSet:
     """Build a ``PolygonSet`` from a list of (m_k, 2) world-vertex arrays and per-polygon data.
 
@@ -221,7 +235,8 @@ def polygon_set(
     the body kinematic for the contact). Missing velocities default to zero, materials to 0.
     features: (solid, corner) over all vertices (``PolygonSet`` doc, e.g. from
     ``perga.geometry.pieces.piece_features``); default: every polygon a whole body (all edges
-    solid, every vertex its own corner).
+    solid, every vertex its own corner). body: each polygon's body's first polygon (default:
+    every polygon its own body).
     """
     n_poly = len(vertices)
     polys = [np.ascontiguousarray(p, dtype=np.float64) for p in vertices]
@@ -273,7 +288,18 @@ def polygon_set(
         mat=per_poly(mat, 0, np.int32),
         solid=np.ascontiguousarray(solid, dtype=np.int8),
         corner=np.ascontiguousarray(corner, dtype=np.int64),
+        body=np.arange(n_poly, dtype=np.int64) if body is None else _bodies(body, n_poly),
     )
+
+
+def _bodies(body: list[int] | np.ndarray, n_poly: int) -> np.ndarray:
+    """``polygon_set``'s body array, checked: each entry names the first polygon of its body."""
+    out = np.ascontiguousarray(body, dtype=np.int64).copy()
+    if out.shape != (n_poly,):
+        raise ValueError(f"body must have shape ({n_poly},) (got {out.shape})")
+    if np.any(out < 0) or np.any(out > np.arange(n_poly)) or np.any(out[out] != out):
+        raise ValueError("body: each polygon must name its body's first polygon")
+    return out
 
 
 @dataclass(frozen=True)
@@ -363,6 +389,7 @@ def no_polygons() -> tuple[PolygonSet, ContactTable]:
         mat=np.zeros(0, np.int32),
         solid=np.zeros(0, np.int8),
         corner=np.zeros((0, 3), np.int64),
+        body=np.zeros(0, np.int64),
     )
     table = ContactTable(
         law=np.zeros((0, 0), np.int32),
