@@ -32,6 +32,7 @@ from perga.contact.soft.polygon_set import (
     HIST_PEAK_FORCE,
 )
 from perga.geometry.disc_polygon import FASTMATH, closest_feature
+from perga.machine import units as u
 from perga.model.records import HammerState, Impact
 
 if TYPE_CHECKING:
@@ -43,7 +44,7 @@ class _Start(NamedTuple):
 
     time: float
     normal: tuple[float, float]
-    hammer_angle: float
+    edge: tuple[float, float]
     normal_velocity: float
     tangential_velocity: float
     point: tuple[float, float]
@@ -63,7 +64,19 @@ def hertz_peak_pressure(force: float, k_n: float, radius: float) -> float:
     return 3.0 * force / (2.0 * math.pi * radius * delta)
 
 
-def _rotate(n: tuple[float, float], angle: float) -> tuple[float, float]:
+def _first_edge(vertices: np.ndarray, start: np.ndarray, k: int) -> tuple[float, float]:
+    """The first edge of polygon k (vertices ``vertices[start[k]:start[k + 1]]``), m."""
+    a, b = vertices[start[k]], vertices[start[k] + 1]
+    return (float(b[0] - a[0]), float(b[1] - a[1]))
+
+
+def _turned(
+    n: tuple[float, float], before: tuple[float, float], after: tuple[float, float]
+) -> tuple[float, float]:
+    """``n`` turned as a body whose edge ``before`` became ``after`` turned."""
+    angle = math.atan2(
+        before[0] * after[1] - before[1] * after[0], before[0] * after[0] + before[1] * after[1]
+    )
     c, s = math.cos(angle), math.sin(angle)
     return (c * n[0] - s * n[1], s * n[0] + c * n[1])
 
@@ -138,25 +151,24 @@ class SoftImpactLog:
         if count == 0:
             return
         changes = self._changes[:count].tolist()
-        angles = machine.angle[hammer_rows].tolist()  # each hammer's body angle now, rad
         ids = self._ids()
         closed = [(i, k) for i, k, opened in changes if not opened]
         opened = [(i, k) for i, k, opened in changes if opened]
         if closed:
-            self._close(closed, ids, angles)
+            self._close(closed, ids, self._hammer_motion(machine, hammer_rows))
         if opened:
-            self._start(opened, ids, time, angles, machine)
+            self._start(opened, ids, time, machine)
 
     def _start(
         self,
         opened: list[tuple[int, int]],
         ids: np.ndarray,
         time: float,
-        angles: list[float],
         machine: MachineState,
     ) -> None:
         """Start an impact for each (granule row, polygon) of ``opened``: the granule's state
-        and the polygon's pose before the call, the hammer's state now (``machine``)."""
+        and the polygon's pose before the call (with the direction of its first edge there, to
+        turn the normal with it at the end), the hammer's state now (``machine``)."""
         g, p = self._g, self._g.polygons
         rows = np.array(opened, dtype=np.int64).reshape(-1, 2)
         normals = _start_normals(
@@ -176,7 +188,7 @@ class SoftImpactLog:
             self._open[(int(ids[i]), k)] = _Start(
                 time=time,
                 normal=(nx, ny),
-                hammer_angle=angles[hammer],
+                edge=_first_edge(self._vertices, p.start, k),
                 normal_velocity=vn,
                 tangential_velocity=vt,
                 point=(px, py),
@@ -185,9 +197,31 @@ class SoftImpactLog:
                 hammer=hammers[hammer],
             )
 
-    def _close(self, closed: list[tuple[int, int]], ids: np.ndarray, angles: list[float]) -> None:
+    def _hammer_motion(
+        self, machine: MachineState, hammer_rows: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each polygon's centre of mass where the kernel call left it (m: its pose at the
+        granules' time, where the next call starts) and its hammer body's velocity (m/s) and
+        angular velocity (rad/s) in ``machine``, the state the next call starts from (the
+        wall's polygons take the first hammer's: never read)."""
+        rows = hammer_rows[np.maximum(self._hammer_of, 0)]
+        return (
+            self._g.polygons.com,
+            machine.velocity[rows] * u.VELOCITY,
+            machine.omega[rows] * u.ANGULAR_VELOCITY,
+        )
+
+    def _close(
+        self,
+        closed: list[tuple[int, int]],
+        ids: np.ndarray,
+        hammers_now: tuple[np.ndarray, np.ndarray, np.ndarray],
+    ) -> None:
         """Complete the impact of each (granule row, polygon) of ``closed``: the granule's
-        state now, the contact's totals from the kernel's history."""
+        state now relative to its hammer's motion now (``hammers_now``, ``_hammer_motion``:
+        as the next kernel call will see it, as the start of an impact takes it from the call
+        it begins in; the polygons' own velocities are those the last call started with), the
+        contact's totals from the kernel's history."""
         g = self._g
         done = []
         for i, k in closed:
@@ -197,15 +231,15 @@ class SoftImpactLog:
         if not done:
             return
         hammers = [int(self._hammer_of[k]) for _, k, _ in done]
+        vertices, first = g.polygons.vertices, g.polygons.start
         normals = [
-            _rotate(start.normal, angles[h] - start.hammer_angle)
-            for (_, _, start), h in zip(done, hammers, strict=True)
+            _turned(start.normal, start.edge, _first_edge(vertices, first, k))
+            for _, k, start in done
         ]
         rows = np.array([(i, k) for i, k, _ in done], dtype=np.int64)
         motion = _contact_motion(
-            rows, np.array(normals), g.x, g.v, g.w, g.r, g.m, g.inertia, g.polygons.com,
-            g.polygons.velocity, g.polygons.omega,
-        ).tolist()  # fmt: skip
+            rows, np.array(normals), g.x, g.v, g.w, g.r, g.m, g.inertia, *hammers_now
+        ).tolist()
         table = g.polygon_table
         for (i, k, start), hammer, (vn, vt, _, _, energy) in zip(
             done, hammers, motion, strict=True
