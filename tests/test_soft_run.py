@@ -8,6 +8,7 @@ automatic step, and the energy ledger must close.
 
 import csv
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -168,19 +169,27 @@ def test_hammer_swinging_to_its_stops(tmp_path):
     assert min(alpha) >= -0.3 - 2e-3  # ... and stayed there (joint tolerance)
 
 
-def hammer_restitution(model: str, e: float, end: str, mass: float) -> float:
-    """e of the first impact of the soft single-granule case with hammer ``mass`` (kg), the
-    pair's ``e``, contact ``model`` (Hertz by the case's duration) and ``end``, one granule
-    step per machine step at the step plan's step: −v_n after / v_n before, relative to the
-    hammer's material point."""
+def hammer_restitution(
+    model: str, e: float, end: str, mass: float, *, tip_speed: float | None = None,
+    mount: str = "hinged",
+) -> float:  # fmt: skip
+    """e of the first impact of the soft single-granule case with hammer ``mass`` (kg),
+    ``mount``ed, the pair's ``e``, contact ``model`` (Hertz by the case's duration) and
+    ``end``, one granule step per machine step at the step plan's step: −v_n after / v_n
+    before, relative to the hammer's material point (the impact log's). ``tip_speed``: the
+    rotor turned so that the plate's tip (135 mm) moves at it, m/s (default: the case's
+    600 rpm, 8.5 m/s)."""
     from perga.engine.simulation import Simulation
     from perga.model.compile import compile_case
 
     sets = [f"hammers.mass={mass}", f"contacts[0].restitution={e}", f'contact_model.end="{end}"',
-            f'contact_model.kind="{model}"', "contact_model.granule_substeps=1"]  # fmt: skip
+            f'contact_model.kind="{model}"', "contact_model.granule_substeps=1",
+            f'hammers.mount="{mount}"']  # fmt: skip
+    if tip_speed is not None:
+        sets.append(f"rotor.rpm={tip_speed / 0.135 * 60 / (2 * math.pi)!r}")
     sim = Simulation(compile_case(load_case(SOFT, overrides=sets)), track_energy=False)
     with sim.running():
-        while not sim.impacts and sim.time < 0.05:
+        while not sim.impacts and sim.time < 0.2:
             sim.step()
     first = sim.impacts[0]
     return -first.normal_velocity_after / first.normal_velocity_before

@@ -445,9 +445,11 @@ class SoftGranules:
         w and the polygons' vertices and com copied into ``kept`` (arrays of their shapes).
 
         Polygons, if any, move rigidly from their current pose at their current velocities
-        during the call (the PINNED pivot with them); afterwards they hold the pose n_steps·dt
-        later (the granules' time), and ``polygons.force``, ``torque`` (about the centre of
-        mass) and ``moment`` (about the origin) are the means over the call, N and N·m.
+        during the call (the PINNED pivot with them), their FREE and PINNED bodies kicked by
+        each step's loads (``kernel`` doc); afterwards they hold the pose n_steps·dt later (the
+        granules' time) and the velocities they came with, ``polygons.force``, ``torque``
+        (about the centre of mass) and ``moment`` (about the origin) are the means over the
+        call, N and N·m, and ``polygons.recoil`` what the kicks moved each body.
         ``drag`` (1/s) and ``v_cap`` (m/s) serve ``relax``; their losses are not in
         ``dissipated``.
         """
