@@ -887,6 +887,7 @@ def _advance(
     since = np.zeros(n_poly)
     start_velocity, start_omega = poly.velocity.copy(), poly.omega.copy()
     step_loads = np.zeros((n_poly, 3))
+    body_loads, kicks = np.zeros((n_poly, 3)), np.zeros((n_poly, 3))  # kick_bodies' work
     kicked = False
     rho = bounding_radii(poly.vertices, poly.start, poly.com)
     force[:, :] = 0.0
@@ -986,7 +987,7 @@ def _advance(
         )  # fmt: skip
         if n_poly > 0:
             dissipated[DISSIPATED_POLYGONS] += add_loads(cand, poly.com, loads, step_loads)
-            if kick_bodies(poly, step_loads, dt, origin, since, step * dt):
+            if kick_bodies(poly, step_loads, dt, origin, since, step * dt, body_loads, kicks):
                 kicked = True
                 fresh = False  # the candidates' reach was for the old velocities
             if kicked and step < n_steps - 1:  # the last drift is the machine's next pose's

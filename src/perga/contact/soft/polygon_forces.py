@@ -450,23 +450,23 @@ def add_loads(cand, com, loads, step):
 
 
 @nb.njit(cache=True)
-def kick_bodies(poly, step, dt, origin, since, time):
+def kick_bodies(poly, step, dt, origin, since, time, total, kick):
     """Kick the movable bodies of the polygons ``poly`` (``PolygonArrays``) by one step's loads
     ``step`` (``add_loads``') over dt s, and move the pose origin (``Pose`` ``origin``,
     ``since``) of each kicked polygon to its pose now, ``time`` s; returns whether any was
     kicked. A FREE body takes Δv = F dt/M, Δω = τ_c dt/I_c; a PINNED one Δω = τ_A dt/I_A about
     its pivot A (τ_A = τ_c + (c − A) × F) and its centre's velocity Δω × (c − A); a KINEMATIC
     one (or infinite inertia) none. The body's loads are the sums over its polygons
-    (``PolygonSet.body``)."""
+    (``PolygonSet.body``); ``total`` and ``kick`` (n_poly, 3) are work space."""
     body, kind, com, pivot = poly.body, poly.kind, poly.com, poly.pivot
     n_poly = com.shape[0]
-    total = np.zeros((n_poly, 3))
+    total[:, :] = 0.0
+    kick[:, :] = 0.0
     for k in range(n_poly):
         b = body[k]
         total[b, 0] += step[k, 0]
         total[b, 1] += step[k, 1]
         total[b, 2] += step[k, 2]
-    kick = np.zeros((n_poly, 3))
     any_kick = False
     for b in range(n_poly):
         if body[b] != b or kind[b] == KINEMATIC:
