@@ -287,12 +287,15 @@ def test_limits_on_the_edges_are_accepted(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
     """The bundled separator case over 600 and 1800 rpm × 0.05 and 0.075 kg hammers, three
-    replicates each, on two Dask workers: the files, and the trends physics demands: at each
-    mass the expected damage rises with speed (one impact's breakage probability is 3 % at the
-    600 rpm tip speed and 33 % at 1800 rpm; granules struck at low speed are struck more often,
-    so the rise of the mean is 0.35 to 1.1 combined sd √(sd₁² + sd₂²) with three 0.3 s
-    replicates, docs/operating-window.md), and the released fraction does not fall by more than
-    twice the combined sd (the comb's release needs a peak force that grows with speed)."""
+    replicates each, on two Dask workers: the files, and the trends physics demands. At each
+    mass every run at 1800 rpm has a higher mean breakage probability per impact than every run
+    at 600 rpm (measured 0.04-0.10 against 0.14-0.18: the impact's specific energy grows with
+    the tip speed squared). The expected damage of the granules out of the comb and the released
+    fraction do not fall by more than twice the combined sd √(sd₁² + sd₂²): three 0.3 s
+    replicates cannot show damage rising, since at 600 rpm a granule out of the comb may stay in
+    the chamber and be struck again and again (a replicate at 50 g: no product, damage 0.55,
+    the point 0.31 ± 0.21 against 0.27 ± 0.05 at 1800 rpm); the full map shows the rise
+    (docs/operating-window.md). The comb's release needs a peak force that grows with speed."""
     out = tmp_path / "window"
     saved = saved_figures(monkeypatch)
     code = main(
@@ -320,11 +323,18 @@ def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
         def mean_sd(metric: str, i: int) -> tuple[float, float]:
             return table[f"{metric}_mean"][i], table[f"{metric}_sd"][i]
 
-        (d0, s0), (d1, s1) = mean_sd("damaged_fraction", slow), mean_sd("damaged_fraction", fast)
-        assert d1 > d0, (d0, s0, d1, s1)
-        (r0, s0), (r1, s1) = mean_sd("released_fraction", slow), mean_sd("released_fraction", fast)
-        assert r1 >= r0 - 2 * math.hypot(s0, s1), (r0, s0, r1, s1)
+        for metric in ("damaged_fraction", "released_fraction"):
+            (m0, s0), (m1, s1) = mean_sd(metric, slow), mean_sd(metric, fast)
+            assert m1 >= m0 - 2 * math.hypot(s0, s1), (metric, m0, s0, m1, s1)
     results = pq.read_table(out / "results.parquet").to_pydict()
     assert len(results["key"]) == 12 and len(set(results["seed"])) == 3
+    breakage: dict[tuple[float, float], list[float]] = {}
+    for rpm, mass, run in zip(
+        results["rotor.rpm"], results["hammers.mass"], results["directory"], strict=True
+    ):
+        table = np.genfromtxt(Path(run) / "impacts.csv", delimiter=",", names=True)
+        breakage.setdefault((mass, rpm), []).append(float(np.mean(table["breakage_probability"])))
+    for mass in (0.05, 0.075):
+        assert min(breakage[(mass, 1800.0)]) > max(breakage[(mass, 600.0)]), breakage
     report = (out / "report.md").read_text()
     assert "## Best setting" in report and "## Trends along rotor.rpm" in report
