@@ -152,11 +152,11 @@ class MachinePolygons:
     def apply_loads(self) -> float:
         """Set the polygons' mean loads (from the last kernel call) as the bodies' force and
         torque for the next Pymunk step, and move the bodies by their recoil in the call (the
-        kernel kicks the hammers at every granule step but the last; Chipmunk drifts them at the
-        call's start velocities and kicks them with the mean loads: with the recoil added, the
-        step lands each hammer where the granule steps had it, a multiple-time-step split as in
-        r-RESPA, docs/architecture.md); returns the mean moment about the axis on the hammers
-        the rotor drives, N·m."""
+        kernel kicks the hammers at every granule step; Chipmunk drifts them at the call's start
+        velocities and kicks them with the mean loads: with the recoil added, the step lands
+        each hammer where the granule steps had it, a multiple-time-step split as in r-RESPA,
+        docs/architecture.md); returns the mean moment about the axis on the hammers the rotor
+        drives, N·m."""
         return load_bodies(*self.load_arguments())
 
     def load_arguments(self) -> tuple:
