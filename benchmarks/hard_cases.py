@@ -40,10 +40,10 @@ HARD = {
 def one(case: str, overrides: list[str], duration: float) -> str:
     """One row: refused (its first problem), or the run's closure and wall time."""
     try:
-        loaded = load_case(case, overrides=[*overrides, "solver.threads=1"])
+        system = compile_case(load_case(case, overrides=[*overrides, "solver.threads=1"]))
     except CaseError as exc:
         return f"refused: {exc.problems[0].split(': ', 1)[1][:110]}"
-    sim = Simulation(compile_case(loaded))
+    sim = Simulation(system)
     start = time.perf_counter()
     try:
         sim.run(duration)

@@ -35,8 +35,8 @@ The terms:
   (docs/reliability.md).
 * ``residual`` = drive_work + gravity_work + joint_correction + inflow − outflow − ΔKE −
   Δelastic − contact_dissipation − friction − drag, J: what the steps lose or make besides
-  that (the first-order split of the kicks; the hammers' velocity held through soft granule
-  substeps; the rigid impulses' step error; each falls with the step, docs/reliability.md)
+  that (the first-order split of the kicks, such as gravity's on a rigid contact; the soft
+  kernel's step; each falls with the step, docs/reliability.md)
   and rounding (the swing stops' and hinge friction's work is booked signed by their effects,
   :class:`~perga.machine.effects.ConstraintLosses`).
 * ``energy_in_play`` = max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|, ½Σ_i|ΔKE_i|,

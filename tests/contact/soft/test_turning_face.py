@@ -26,7 +26,7 @@ from perga.engine import Simulation
 from perga.model.compile import compile_case
 
 CASE = Path(__file__).resolve().parents[3] / "cases" / "rebound-test.toml"
-E, SPEED, DURATION, HALF_WIDTH = 0.05, 1.0, 1e-4, 0.01
+E, DURATION, HALF_WIDTH = 0.05, 1e-4, 0.01
 
 
 def _face(theta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -37,13 +37,13 @@ def _face(theta: float) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
-def _shot(omega: float) -> tuple[float, float]:
+def _shot(omega: float, speed: float) -> tuple[float, float]:
     """e of the kernel (−u_n after/u_n before, relative to the face's material point, tracked
     step by step) and of solve_ivp from the kernel's state ten steps before the contact."""
     sets = ['contact_model.kind="linear"', f"contact_model.duration={DURATION}",
             'contact_model.end="overlap"', f"contacts[0].restitution={E}",
             "contacts[0].friction=0.0",
-            f"granules.placement.speed={SPEED}", "granules.placement.angle=0.0",
+            f"granules.placement.speed={speed}", "granules.placement.angle=0.0",
             f"rotor.omega={omega!r}", "hammers.hinge_radius=0.08",
             "hammers.shape={kind='plate', length=0.06, width=0.02, hinge_offset=0.005}",
             'solver.dt="auto"']  # fmt: skip
@@ -102,10 +102,18 @@ def _shot(omega: float) -> tuple[float, float]:
     return kernel, reference
 
 
-@pytest.mark.parametrize(("rpm", "deviation"), [(0.0, 0.0), (1500.0, -0.39)])
-def test_the_kernel_rebounds_as_the_law_on_a_turning_face(rpm: float, deviation: float) -> None:
+@pytest.mark.parametrize(
+    ("rpm", "speed", "deviation"),
+    [(0.0, 1.0, 0.0), (1500.0, 1.0, -0.39), (2700.0, 10.0, -0.0062), (2700.0, 40.0, +0.0047)],
+)
+def test_the_kernel_rebounds_as_the_law_on_a_turning_face(
+    rpm: float, speed: float, deviation: float
+) -> None:
     """At rest (ω = 1e-6 rad/s) both give the asked e (the kernel to its step error); at
-    1500 rpm both give e 39 % low, and agree to 0.3 % of e."""
-    kernel, reference = _shot(max(rpm * 2 * math.pi / 60, 1e-6))
-    assert reference / E - 1 == pytest.approx(deviation, abs=0.005)
+    1500 rpm and 1 m/s both give e 39 % low; at 2700 rpm (a 140 mm tip at 40 m/s) and 10 or
+    40 m/s the law's own −0.62 and +0.47 % (the reference, to 5e-4 of e): the turning face's
+    share of the restitution table's fast cells (docs/validation.md). The kernel agrees with
+    the reference to 0.3 % of e (measured 0.03-0.11 % at 2700 rpm)."""
+    kernel, reference = _shot(max(rpm * 2 * math.pi / 60, 1e-6), speed)
+    assert reference / E - 1 == pytest.approx(deviation, abs=5e-4 if rpm > 1500 else 5e-3)
     assert kernel == pytest.approx(reference, rel=3e-3)

@@ -24,9 +24,10 @@ Pymunk 7.3.1's batch API this relies on, each checked against the per-contact ca
 replaces (``tests/contact/rigid/test_dissipation.py``):
 
 * The arbiter list is Chipmunk's arbiter cache: besides the contacts solved in this step it
-  holds pairs that touched in the last ``collision_persistence`` steps, whose contact count
-  reads 0 (and impulse 0). Exactly the arbiters with count > 0 were solved in this step
-  (pairs rejected before solving, e.g. two infinite masses, also read 0).
+  may hold pairs that touched in the last ``collision_persistence`` steps (1 in perga:
+  :func:`~perga.machine.machine.build_machine`), whose contact count reads 0 (and impulse 0).
+  Exactly the arbiters with count > 0 were solved in this step (pairs rejected before
+  solving, e.g. two infinite masses, also read 0).
 * The order of the two bodies is not the collision handler's (granule first), which the
   callbacks see: read after the step, body ids, normal, impulse and points came out in
   Chipmunk's internal shape order (granule-granule pairs of two materials in both orders;
