@@ -68,6 +68,18 @@ class Impact:
     peak_pressure: float = math.nan
     """Hertz's peak contact pressure at ``peak_force``, p0 = (2E*/π)·√(δ/R), Pa (soft Hertz
     contacts; a diagnostic of damage)."""
+    granule_spin_before: float = math.nan
+    """The granule's angular velocity at the impact's start, rad/s (0 for a sliding point)."""
+    granule_spin_after: float = math.nan
+    """The granule's angular velocity at the impact's end, rad/s."""
+    granule_velocity_after: tuple[float, float] = (math.nan, math.nan)
+    """The granule's velocity in the fixed frame at the impact's end, m/s."""
+    held: bool = False
+    """The granule was held in its cell (a comb's) at the impact's start."""
+    other_contacts: int = -1
+    """Contacts on the granule, or on the hammer if it is not carried by a rotor of prescribed
+    motion, besides this impact's, while it lasted (rigid: in its step); 0: the impact is
+    isolated; -1: not recorded (soft contacts)."""
 
     def __post_init__(self) -> None:
         if math.isnan(self.specific_energy):

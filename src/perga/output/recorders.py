@@ -149,6 +149,7 @@ SPLIT = {
     "point": ("x", "y"),
     "normal": ("nx", "ny"),
     "granule_velocity_before": ("vx_before", "vy_before"),
+    "granule_velocity_after": ("vx_after", "vy_after"),
 }
 """Vector fields of the records and their columns."""
 

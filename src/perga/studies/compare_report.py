@@ -262,9 +262,14 @@ def write_report(
         "",
         f"Command: `{command}`" if command else "",
         "",
-        f"{len(analyses)} analyses, {len(rows)} rows: {sum(bool(r.agrees) for r in agree)} of "
-        f"{len(agree)} rows agree where the physics is the same (largest |error| "
-        f"{worst:.2e}, tolerance 1 %); {len(differ)} rows compare regimes that differ; "
+        f"{len(analyses)} analyses, {len(rows)} rows: "
+        + (
+            f"{sum(bool(r.agrees) for r in agree)} of {len(agree)} rows agree where the physics "
+            f"is the same (largest |error| {worst:.2e}, tolerance 1 %); "
+            if agree
+            else "no row compares the same physics; "
+        )
+        + f"{len(differ)} rows compare regimes that differ; "
         f"{len(unavailable)} statistics could not be computed (the last section says why).",
         "",
     ]

@@ -13,6 +13,7 @@ of the relative contact velocity before and after (exact for one impulse).
 from __future__ import annotations
 
 import math
+from collections.abc import Container
 from dataclasses import replace
 
 import pymunk
@@ -40,7 +41,30 @@ def _granule_energy(body: pymunk.Body) -> float:
     return 0.5 * body.mass * body.velocity.length_squared + spin
 
 
-_Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, HammerState]
+def _spin(body: pymunk.Body) -> float:
+    """A granule body's angular velocity, rad/s."""
+    return u.to_si(body.angular_velocity, u.ANGULAR_VELOCITY)
+
+
+def _other_contacts(arbiter: pymunk.Arbiter) -> int:
+    """Touching contacts in this step on the granule, and on the hammer unless its body moves
+    as prescribed (kinematic: no contact changes its motion), but those of this granule with
+    this hammer body (its other pieces belong to this impact)."""
+    pair = {shape.body for shape in arbiter.shapes}
+    others: list[pymunk.Arbiter] = []
+
+    def visit(other: pymunk.Arbiter) -> None:
+        if other.contact_point_set.points and {s.body for s in other.shapes} != pair:
+            others.append(other)
+
+    granule, hammer = (shape.body for shape in arbiter.shapes)
+    granule.each_arbiter(visit)
+    if hammer.body_type == pymunk.Body.DYNAMIC:
+        hammer.each_arbiter(visit)
+    return len(others)
+
+
+_Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, float, HammerState]
 
 
 class RigidImpactLog:
@@ -52,11 +76,19 @@ class RigidImpactLog:
     ``pre_solve`` replaces or drops: hammers of several pieces, :mod:`~perga.contact.rigid.
     outline`; sliding points, :mod:`~perga.contact.rigid.sliding_point`) an impact starts at a
     contact's first processed ``pre_solve``, after those listeners, so that its velocities
-    before and after are taken at the same points.
+    before and after are taken at the same points. ``held``: the ids of the granules held in
+    their cells (the contact model's, kept up to date by it).
     """
 
-    def __init__(self, bodies: RigidBodies, *, rewritten: bool = False) -> None:
+    def __init__(
+        self,
+        bodies: RigidBodies,
+        held: Container[int],
+        *,
+        rewritten: bool = False,
+    ) -> None:
         self.impacts: list[Impact] = []
+        self._held = held
         self.time = 0.0
         self._machine = bodies.machine
         self._owner = bodies.shape_owner
@@ -80,7 +112,7 @@ class RigidImpactLog:
         relative, _, _ = _contact(arbiter)
         body = arbiter.shapes[0].body
         state = self._machine.hammer_state(self._key(arbiter)[1])
-        pending = (relative, _granule_energy(body), body.velocity, state)
+        pending = (relative, _granule_energy(body), body.velocity, _spin(body), state)
         self._pending[tuple(arbiter.shapes)] = pending  # type: ignore[index]
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
@@ -90,7 +122,7 @@ class RigidImpactLog:
             return
         self._pending[shapes] = None  # type: ignore[index]
         key = self._key(arbiter)
-        before, granule_energy, granule_velocity, hammer = pending
+        before, granule_energy, granule_velocity, spin, hammer = pending
         after, point, n = _contact(arbiter)
         t = n.perpendicular()
         # measured: total_impulse is the impulse on the first shape's body (the granule)
@@ -129,6 +161,13 @@ class RigidImpactLog:
                 granule_velocity_before=u.vec_to_si(tuple(granule_velocity), u.VELOCITY),
                 hammer_swing_angle_before=hammer.swing_angle,
                 hammer_angular_velocity_before=hammer.angular_velocity,
+                granule_spin_before=spin,
+                granule_spin_after=_spin(arbiter.shapes[0].body),
+                granule_velocity_after=u.vec_to_si(
+                    tuple(arbiter.shapes[0].body.velocity), u.VELOCITY
+                ),
+                held=key[0] in self._held,
+                other_contacts=_other_contacts(arbiter),
             )
         )
 

@@ -101,8 +101,9 @@ class RigidContacts:
             self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
         if rolls == {True, False}:  # two sliding points need nothing (sliding_point)
             self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
+        self._bonds: dict[int, tuple[FloatArray, float]] = {}
         self.log = (
-            RigidImpactLog(self.bodies, rewritten=bool(outline) or sliding)
+            RigidImpactLog(self.bodies, self._bonds, rewritten=bool(outline) or sliding)
             if record_impacts
             else None
         )
@@ -112,7 +113,6 @@ class RigidContacts:
         self.masses = np.array([g.mass for g in spec.granules], dtype=float)
         self.radii = np.array([g.radius for g in spec.granules], dtype=float)
         self._moments = np.array([g.moment if g.rolls else 0.0 for g in spec.granules])
-        self._bonds: dict[int, tuple[FloatArray, float]] = {}
         """Held granules by id: their cell (internal units) and bond force (N)."""
         self._bond_loss = 0.0  # J
         self._reader: BodyReader | None = None

@@ -50,6 +50,8 @@ class _Start(NamedTuple):
     point: tuple[float, float]
     granule_energy: float
     granule_velocity: tuple[float, float]
+    granule_spin: float
+    held: bool
     hammer: HammerState
 
 
@@ -194,6 +196,8 @@ class SoftImpactLog:
                 point=(px, py),
                 granule_energy=energy,
                 granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
+                granule_spin=float(self._w[i]),
+                held=bool(self._g.held[i]),
                 hammer=hammers[hammer],
             )
 
@@ -272,6 +276,10 @@ class SoftImpactLog:
                     hammer_angular_velocity_before=start.hammer.angular_velocity,
                     peak_force=peak,
                     peak_pressure=pressure,
+                    granule_spin_before=start.granule_spin,
+                    granule_spin_after=float(g.w[i]),
+                    granule_velocity_after=(float(g.v[i, 0]), float(g.v[i, 1])),
+                    held=start.held,
                 )
             )
 

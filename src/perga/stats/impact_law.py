@@ -1,0 +1,161 @@
+"""Every recorded granule-hammer impact of a run against the impact law with Coulomb friction,
+its sticking cap and the hammer's full effective mass (:mod:`perga.analytic.coupled_impact`),
+predicted from the state the impact log recorded just before it.
+
+An impact is **isolated** when nothing but the hammer touches the granule and nothing but the
+granule touches the hammer while it lasts (the log's ``other_contacts`` is 0) and the granule is
+not held in a comb's cell; then the law describes it exactly for rigid contacts, and to the
+contact's duration for soft ones. Every other impact is given its regime: the reason it cannot
+match. The hammer's effective mass: hinged on a rotor of prescribed speed, pivoted about its
+hinge (its position from the rotor angle at the impact); welded to such a rotor, immovable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from perga.analytic.coupled_impact import (
+    coupled_impact,
+    granule_compliance,
+    pivoted_compliance,
+)
+from perga.model.compile import compile_case
+from perga.model.system import HammerSpec
+from perga.stats.tables import Run
+
+ISOLATED = "isolated"
+
+
+@dataclass(frozen=True)
+class ImpactCheck:
+    """One impact, simulated against the law (SI; errors dimensionless)."""
+
+    index: int
+    """Row of impacts.csv."""
+    time: float
+    granule: int
+    hammer: int
+    regime: str
+    """``ISOLATED``, or why the law cannot describe this impact."""
+    velocity_error: float
+    """|v'_sim − v'_law| / |v'_law|: the granule's velocity after, fixed frame."""
+    spin_error: float
+    """|ω'_sim − ω'_law|·r / |v'_law|: the spin after, as a rim speed against the velocity."""
+    normal_restitution: tuple[float, float]
+    """−u_n'/u_n, simulated and law."""
+    tangential_ratio: tuple[float, float]
+    """u_t'/u_t of the contact point's slip, simulated and law (nan without slip)."""
+    dissipated: tuple[float, float]
+    """Energy lost in the contact, J, simulated and law."""
+    granule_gain: tuple[float, float]
+    """The granule's kinetic-energy change, J, simulated and law."""
+    sticks: bool
+    """The law stops the slip within its cap."""
+    speed_after: tuple[float, float] = (math.nan, math.nan)
+    """|v'|, m/s, simulated and law."""
+
+
+def _unavailable(run: Run) -> str | None:
+    """Why no impact of ``run`` can be predicted, or None."""
+    if not run.impacts or not run.impacts["time"].size:
+        return "no granule-hammer impact was recorded"
+    if "vx_after" not in run.impacts:
+        return "the impact log has no velocities after (a run made before they were recorded)"
+    if run.case.rotor.inertia is not None:
+        return "a driven rotor of finite inertia (the law here takes the rotor's speed as given)"
+    return None
+
+
+def _regime(row: dict[str, float], hammer: HammerSpec) -> str:
+    if row["held"]:
+        return "the granule is held in the comb"
+    if hammer.mount == "free":
+        return "a free hammer (its centre is not recorded)"
+    if row["other_contacts"] < 0:
+        return "a soft contact of finite duration (the law is instantaneous)"
+    if row["other_contacts"] > 0:
+        count = int(row["other_contacts"])
+        return f"{count} other contact{'s' if count > 1 else ''} during the impact"
+    return ISOLATED
+
+
+def _touch(index: int, row: dict[str, float]) -> ImpactCheck:
+    """A contact that began without approach (u_n >= 0: pushed into touch, not struck)."""
+    nan2 = (math.nan, math.nan)
+    return ImpactCheck(
+        index, row["time"], int(row["granule"]), int(row["hammer"]),
+        "no approach (u_n >= 0): a touch, not an impact",
+        math.nan, math.nan, nan2, nan2, (row["dissipated"], 0.0), nan2, False,
+    )  # fmt: skip
+
+
+def check_impacts(run: Run) -> list[ImpactCheck]:
+    """Every recorded impact of ``run`` against the law; ValueError (its reason) where none can
+    be predicted."""
+    if reason := _unavailable(run):
+        raise ValueError(f"{run.name}: {reason}")
+    system = compile_case(run.case)
+    pair = run.case.granule_hammer_contact
+    radius = dict(zip(run.granules["id"].astype(int), run.granules["radius"], strict=True))
+    mass = dict(zip(run.granules["id"].astype(int), run.granules["mass"], strict=True))
+    rolls = run.case.granules.rolls
+    impacts = run.impacts
+    rotor_angles = run.rotor_angle(impacts["time"])
+    checks = []
+    for i in range(impacts["time"].size):
+        row = {k: float(v[i]) for k, v in impacts.items()}
+        hammer = system.hammers[int(row["hammer"])]
+        g = int(row["granule"])
+        m, r = float(mass[g]), float(radius[g])
+        inertia = 0.5 * m * r * r if rolls else math.inf
+        n = np.array([row["nx"], row["ny"]])
+        n /= np.hypot(*n)
+        t = np.array([-n[1], n[0]])
+        K = granule_compliance(m, r, inertia)
+        if hammer.mount == "hinged":
+            angle = float(rotor_angles[i]) + hammer.angle_on_rotor
+            hinge = hammer.hinge_radius * np.array([math.cos(angle), math.sin(angle)])
+            arm = np.array([row["x"], row["y"]]) - hinge
+            K = K + pivoted_compliance(hammer.moment_about_hinge, arm, n)
+        u_n, u_t = row["normal_velocity_before"], row["tangential_velocity_before"]
+        if u_n >= 0.0:
+            checks.append(_touch(i, row))
+            continue
+        law = coupled_impact(u_n, u_t, pair.restitution, pair.friction, K)
+        impulse = law.normal_impulse * n + law.tangential_impulse * t
+        v0 = np.array([row["vx_before"], row["vy_before"]])
+        v1 = np.array([row["vx_after"], row["vy_after"]])
+        v1_law = v0 + impulse / m
+        w0, w1 = row["granule_spin_before"], row["granule_spin_after"]
+        w1_law = w0 - (0.0 if math.isinf(inertia) else r * law.tangential_impulse / inertia)
+        rolling = 0.0 if math.isinf(inertia) else inertia  # a sliding point holds no spin energy
+        gain_law = 0.5 * (m * (v1_law @ v1_law - v0 @ v0) + rolling * (w1_law**2 - w0**2))
+        lost = -0.5 * (
+            law.normal_impulse * (u_n + law.normal_velocity)
+            + law.tangential_impulse * (u_t + law.tangential_velocity)
+        )
+        speed = float(np.hypot(*v1_law))
+        checks.append(
+            ImpactCheck(
+                index=i,
+                time=row["time"],
+                granule=g,
+                hammer=int(row["hammer"]),
+                regime=_regime(row, hammer),
+                velocity_error=float(np.hypot(*(v1 - v1_law))) / speed,
+                spin_error=abs(w1 - w1_law) * r / speed,
+                normal_restitution=(-row["normal_velocity_after"] / u_n, pair.restitution),
+                tangential_ratio=(
+                    row["tangential_velocity_after"] / u_t if u_t else math.nan,
+                    law.tangential_velocity / u_t if u_t else math.nan,
+                ),
+                dissipated=(row["dissipated"], lost),
+                granule_gain=(row["granule_energy_gain"], gain_law),
+                sticks=law.sticks,
+                speed_after=(float(np.hypot(*v1)), speed),
+            )
+        )
+    return checks
