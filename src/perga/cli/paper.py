@@ -106,9 +106,13 @@ def compare(args: argparse.Namespace) -> int:
     failed = sum(not r["agrees"] for r in rows)
     worst = data["largest_agreement_error"]
     largest = f", largest error {worst:.2e}" if worst is not None else ""
+    agreement = (
+        f"{len(rows) - failed} of {len(rows)} agreement rows within 1 %{largest}"
+        if rows
+        else "no row compares the same physics"
+    )
     print(
-        f"wrote {out}/report.md ({len(data['figures'])} figures): {len(rows) - failed} of "
-        f"{len(rows)} agreement rows within 1 %{largest}; "
+        f"wrote {out}/report.md ({len(data['figures'])} figures): {agreement}; "
         f"{len(data['rows']) - len(rows)} rows compare regimes that differ; "
         f"{len(data['unavailable'])} statistics not computed (report.md says why); "
         f"{time.perf_counter() - start:.1f} s"

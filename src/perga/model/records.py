@@ -78,8 +78,8 @@ class Impact:
     """The granule was held in its cell (a comb's) at the impact's start."""
     other_contacts: int = -1
     """Contacts on the granule, or on the hammer if it is not carried by a rotor of prescribed
-    motion, besides this impact's, while it lasted (rigid: in its step); 0: the impact is
-    isolated; -1: not recorded (soft contacts)."""
+    motion, besides this impact's (rigid: in its step; soft: the more of those at its start and
+    at its end); 0: the impact is isolated; -1: not recorded."""
 
     def __post_init__(self) -> None:
         if math.isnan(self.specific_energy):

@@ -3,9 +3,10 @@ its sticking cap and the hammer's full effective mass (:mod:`perga.analytic.coup
 predicted from the state the impact log recorded just before it.
 
 An impact is **isolated** when nothing but the hammer touches the granule and nothing but the
-granule touches the hammer while it lasts (the log's ``other_contacts`` is 0) and the granule is
-not held in a comb's cell; then the law describes it exactly for rigid contacts, and to the
-contact's duration for soft ones. Every other impact is given its regime: the reason it cannot
+granule touches the hammer while it lasts (the log's ``other_contacts`` is 0: rigid, in the
+impact's step; soft, at its start and its end) and the granule is not held in a comb's cell;
+then the law describes it exactly for rigid contacts, and to the contact's duration for soft
+ones. Every other impact is given its regime: the reason it cannot
 match. The hammer's effective mass: hinged on a rotor of prescribed speed, pivoted about its
 hinge (its position from the rotor angle at the impact); welded to such a rotor, immovable.
 """
@@ -75,7 +76,7 @@ def _regime(row: dict[str, float], hammer: HammerSpec) -> str:
     if hammer.mount == "free":
         return "a free hammer (its centre is not recorded)"
     if row["other_contacts"] < 0:
-        return "a soft contact of finite duration (the law is instantaneous)"
+        return "its other contacts were not recorded"
     if row["other_contacts"] > 0:
         count = int(row["other_contacts"])
         return f"{count} other contact{'s' if count > 1 else ''} during the impact"

@@ -18,6 +18,7 @@ import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
 from perga.output.figures import new_figure, save
+from perga.stats.impact_law import ISOLATED
 from perga.studies.compare import Analysis, Row, Unavailable
 from perga.studies.paper_check import Params
 
@@ -217,6 +218,84 @@ def histogram(analyses: list[Analysis], _paper: Params | None, path: Path) -> bo
     return save(fig, path)
 
 
+@figure("impacts", "Impacts against the impact law with friction")
+def impact_errors(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
+    checks = [c for a in analyses for c in a.series.get("impact_checks", [])]
+    errors = np.array([c.velocity_error for c in checks])
+    isolated = np.array([c.regime == ISOLATED for c in checks], dtype=bool)
+    finite = np.isfinite(errors) & (errors > 0)
+    if not finite.any():
+        return False
+    fig, ax = new_figure((6.5, 4))
+    bins = np.logspace(np.log10(errors[finite].min()), np.log10(errors[finite].max()), 40)
+    for mask, label in ((isolated, "isolated"), (~isolated, "not isolated")):
+        if (mask & finite).any():
+            ax.hist(errors[mask & finite], bins=bins, alpha=0.6, label=label)
+    ax.axvline(0.01, color="k", lw=0.8, ls="--", label="1 %")
+    ax.set(xscale="log", xlabel="|v′ − v′_law| / |v′_law|", ylabel="impacts",
+           title=f"velocity after, {finite.sum()} impacts")  # fmt: skip
+    ax.legend(fontsize=7)
+    return save(fig, path)
+
+
+def impact_summary(analysis: Analysis) -> dict[str, object] | None:
+    """The impacts of one analysed run against the law: counts, shares, quantiles of the
+    velocity error, the five worst with their regime, and a verdict in words; None without
+    checked impacts."""
+    checks = analysis.series.get("impact_checks")
+    if not checks:
+        return None
+    isolated = [c for c in checks if c.regime == ISOLATED]
+    lost = sum(abs(c.dissipated[0]) for c in checks)
+    share_lost = sum(abs(c.dissipated[0]) for c in isolated) / lost if lost else 0.0
+    errors = np.array([c.velocity_error for c in isolated])
+    quantiles = (
+        {q: float(np.quantile(errors, q)) for q in (0.5, 0.9, 0.99, 1.0)} if errors.size else {}
+    )
+    within = float(np.mean(errors <= 0.01)) if errors.size else math.nan
+    compared = [c for c in checks if math.isfinite(c.velocity_error)]
+    worst = sorted(compared, key=lambda c: -c.velocity_error)[:5]
+    verdict = (
+        f"{len(isolated) / len(checks):.0%} of {len(checks)} impacts, carrying {share_lost:.0%} "
+        "of the energy lost in impacts, are isolated"
+        + (
+            f"; on those the velocity after agrees with the law within 1 % in {within:.1%} "
+            f"(median error {quantiles[0.5]:.2e}, worst {quantiles[1.0]:.2e})."
+            if errors.size
+            else "."
+        )
+    )
+    return {
+        "run": analysis.name,
+        "impacts": len(checks),
+        "isolated": len(isolated),
+        "energy_share_isolated": share_lost,
+        "within_1_percent": within if errors.size else None,
+        "error_quantiles": {str(q): v for q, v in quantiles.items()},
+        "worst": [
+            {"granule": c.granule, "time": c.time, "regime": c.regime, "error": c.velocity_error}
+            for c in worst
+        ],
+        "verdict": verdict,
+    }
+
+
+def _impact_section(summaries: list[dict[str, object]]) -> list[str]:
+    lines = ["## Impacts, one by one", ""]
+    for s in summaries:
+        lines += [f"**{s['run']}**: {s['verdict']}", ""]
+        lines += [
+            "| worst | granule | time, s | regime | velocity error |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {k + 1} | {w['granule']} | {w['time']:.6g} | {w['regime']} | {w['error']:.3e} |"
+            for k, w in enumerate(s["worst"])  # type: ignore[arg-type]
+        ]
+        lines.append("")
+    return lines
+
+
 # --- the report ---------------------------------------------------------------------------------
 
 
@@ -236,6 +315,12 @@ def _table(rows: list[Row]) -> str:
         for r in rows
     ]
     return "\n".join([head, *body]) + "\n"
+
+
+def _shown_above(rows: list[Row], shown: set[str]) -> str:
+    """A line naming how many of ``rows`` are in the figures' sections above (not repeated)."""
+    above = sum(r.figure in shown for r in rows)
+    return f"\n{above} more in the figures' sections above.\n" if above else ""
 
 
 def write_report(
@@ -278,8 +363,16 @@ def write_report(
         section = [r for r in rows if r.figure == key]
         if section:
             lines.append(_table(section))
-    lines += ["## Agreement where the physics is the same", "", _table(agree)]
-    lines += ["## Regimes that cannot match, and by how much", "", _table(differ)]
+    impacts = [s for a in analyses if (s := impact_summary(a)) is not None]
+    if impacts:
+        lines += _impact_section(impacts)
+    shown = set(written)
+    for heading, group in (
+        ("Agreement where the physics is the same", agree),
+        ("Regimes that cannot match, and by how much", differ),
+    ):
+        rest = [r for r in group if r.figure not in shown]
+        lines += [f"## {heading}", "", (_table(rest) if rest else "") + _shown_above(group, shown)]
     if unavailable:
         lines += ["## Not computed, and why", "", "| run | statistic | reason |", "|---|---|---|"]
         lines += [f"| {u.run} | {u.statistic} | {u.reason} |" for u in unavailable]
@@ -291,6 +384,7 @@ def write_report(
         "analyses": [{"name": a.name, "kind": a.kind} for a in analyses],
         "rows": [r.as_dict() for r in rows],
         "unavailable": [asdict(u) for u in unavailable],
+        "impacts": impacts,
         "largest_agreement_error": worst if agree else None,
     }
     (out / "report.json").write_text(json.dumps(data, indent=2, default=float) + "\n")

@@ -671,23 +671,36 @@ class SoftGranules:
         centre. Builds the neighbour list first if a build is pending (``invalidate``, or no
         step yet).
         """
-        n = self.n
-        i, j, delta, _ = self._pairs()
-        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
-        overlap = np.zeros(n)
+        i, j, delta, walls, active = self._touching()
+        count = self._count(i, j, walls, active)
+        overlap = np.zeros(self.n)
         np.maximum.at(overlap, i, delta)
         np.maximum.at(overlap, j, delta)
-        walls = self._walls_overlap()
-        count += np.count_nonzero(walls > 0.0, axis=1)
         if walls.size:
             np.maximum(overlap, walls.max(axis=1), out=overlap)
-        active = self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-        count += np.count_nonzero(active, axis=1)
         outline = self._poly[0].outline()
         for a, k in np.argwhere(active):
             d, _, _ = closest_feature(self.x[a, 0], self.x[a, 1], *outline, k)
             overlap[a] = max(overlap[a], self.r[a] - d)
         return count.astype(np.int32), overlap
+
+    def contact_totals(self) -> np.ndarray:
+        """Per granule, the number of its contacts now, (n,) int32 (those of
+        :meth:`contact_counts`, without their overlaps)."""
+        i, j, _, walls, active = self._touching()
+        return self._count(i, j, walls, active).astype(np.int32)
+
+    def _touching(self) -> tuple[np.ndarray, ...]:
+        """The granule pairs touching (i, j, their overlaps δ > 0), each granule's overlap with
+        each wall, and the polygon contacts the kernel holds active, (n, polygons) bool."""
+        i, j, delta, _ = self._pairs()
+        walls = self._walls_overlap()
+        return i, j, delta, walls, self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+
+    def _count(self, i: np.ndarray, j: np.ndarray, walls: np.ndarray, active: np.ndarray):
+        n = self.n
+        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+        return count + np.count_nonzero(walls > 0.0, axis=1) + np.count_nonzero(active, axis=1)
 
     def max_overlap(self) -> float:
         """Largest overlap of any granule with a granule or wall, m (0 with no contact)."""

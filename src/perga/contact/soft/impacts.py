@@ -52,6 +52,7 @@ class _Start(NamedTuple):
     granule_velocity: tuple[float, float]
     granule_spin: float
     held: bool
+    others: int
     hammer: HammerState
 
 
@@ -89,7 +90,9 @@ class SoftImpactLog:
     its own); hand :meth:`kept` to every kernel call (it copies the start state there), call
     :meth:`after` after it, and :meth:`rows_changed` when granules are added or removed.
     ``hammer_state(h, machine)`` gives hammer h's :class:`~perga.model.records.HammerState` now
-    (``machine``: the machine's state now), ``ids()`` the id of each granule row."""
+    (``machine``: the machine's state now), ``ids()`` the id of each granule row;
+    ``movable[h]``: whether hammer h's body moves under contacts (not carried by a rotor of
+    prescribed speed). An impact's other contacts are counted at its start and its end."""
 
     def __init__(
         self,
@@ -97,12 +100,14 @@ class SoftImpactLog:
         hammer_of: np.ndarray,
         hammer_state: Callable[[int, MachineState], HammerState],
         ids: Callable[[], np.ndarray],
+        movable: np.ndarray,
     ) -> None:
         self.impacts: list[Impact] = []
         self._g = granules
         self._ids = ids
         self._hammer_of = hammer_of
         self._hammer_state = hammer_state
+        self._movable = movable
         self._active = granules.polygon_hist[:, :, HIST_ACTIVE] != 0.0
         self._seen = int(granules.counts[COUNT_CONTACT_CHANGES])
         self._changes = np.empty((0, 3), dtype=np.int64)
@@ -181,8 +186,9 @@ class SoftImpactLog:
             p.velocity, p.omega,
         ).tolist()  # fmt: skip
         hammers: dict[int, HammerState] = {}
-        for (i, k), (nx, ny), (vn, vt, px, py, energy) in zip(
-            opened, normals.tolist(), motion, strict=True
+        others = self._others(opened)
+        for (i, k), (nx, ny), (vn, vt, px, py, energy), other in zip(
+            opened, normals.tolist(), motion, others, strict=True
         ):
             hammer = int(self._hammer_of[k])
             if hammer not in hammers:
@@ -198,8 +204,27 @@ class SoftImpactLog:
                 granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
                 granule_spin=float(self._w[i]),
                 held=bool(self._g.held[i]),
+                others=other,
                 hammer=hammers[hammer],
             )
+
+    def _others(self, contacts: list[tuple[int, int]]) -> list[int]:
+        """For each (granule row, polygon): the granule's contacts now but those with the
+        polygon's hammer, and, if that hammer moves under contacts, the other granules' contacts
+        with it."""
+        g = self._g
+        totals = g.contact_totals()
+        active = g.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        out = []
+        for i, k in contacts:
+            pieces = self._hammer_of == self._hammer_of[k]
+            other = int(totals[i]) - int(np.count_nonzero(active[i, pieces]))
+            if self._movable[self._hammer_of[k]]:
+                other += int(np.count_nonzero(active[:, pieces])) - int(
+                    np.count_nonzero(active[i, pieces])
+                )
+            out.append(other)
+        return out
 
     def _hammer_motion(
         self, machine: MachineState, hammer_rows: np.ndarray
@@ -245,8 +270,9 @@ class SoftImpactLog:
             rows, np.array(normals), g.x, g.v, g.w, g.r, g.m, g.inertia, *hammers_now
         ).tolist()
         table = g.polygon_table
-        for (i, k, start), hammer, (vn, vt, _, _, energy) in zip(
-            done, hammers, motion, strict=True
+        others = self._others([(i, k) for i, k, _ in done])
+        for (i, k, start), hammer, (vn, vt, _, _, energy), other in zip(
+            done, hammers, motion, others, strict=True
         ):
             row = g.polygon_hist[i, k]
             peak = float(row[HIST_PEAK_FORCE])
@@ -280,6 +306,7 @@ class SoftImpactLog:
                     granule_spin_after=float(g.w[i]),
                     granule_velocity_after=(float(g.v[i, 0]), float(g.v[i, 1])),
                     held=start.held,
+                    other_contacts=max(start.others, other),
                 )
             )
 

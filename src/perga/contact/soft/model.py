@@ -31,6 +31,7 @@ from time import monotonic
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pymunk
 
 from perga.contact.protocol import FloatArray, GranuleState
 from perga.contact.soft.build import granule_table_materials, soft_granules
@@ -116,7 +117,11 @@ class SoftContacts:
         self.ids = np.arange(len(spec.granules), dtype=np.int64)
         self.log = (
             SoftImpactLog(
-                self.granules, self.polygons.hammer_of, machine.hammer_state, self.present_ids
+                self.granules,
+                self.polygons.hammer_of,
+                machine.hammer_state,
+                self.present_ids,
+                np.array([b.body_type == pymunk.Body.DYNAMIC for b in machine.hammer_bodies]),
             )
             if record_impacts
             else None
