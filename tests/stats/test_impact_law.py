@@ -82,3 +82,14 @@ def test_the_hinged_impacts_of_four_impacts_follow_the_law_with_friction(tmp_pat
     assert max(c.spin_error for c in checks) < 1e-3
     lost = np.array([c.dissipated for c in checks]).sum(axis=0)
     assert lost[0] == pytest.approx(lost[1], rel=0.01)
+
+
+def test_a_free_hammer_is_predicted_about_its_recorded_centre(tmp_path: Path) -> None:
+    """cases/two-body-impact.toml: a free hammer strikes a granule head-on; the law with the
+    free body's compliance about the centre the log recorded gives the run's velocity after to
+    rounding (1e-12: one impulse, no pin to iterate)."""
+    run = tmp_path / "run"
+    case = str(ROOT / "cases" / "two-body-impact.toml")
+    assert main(["run", case, "-o", str(run), "--quiet"]) == 0
+    (check,) = check_impacts(load_run(run))
+    assert check.regime == ISOLATED and check.velocity_error < 1e-12

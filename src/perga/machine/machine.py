@@ -202,6 +202,7 @@ class Machine:
                 ),
                 swing_angle=float(row[2] - state.table[0, 2] - spec.angle_on_rotor),
                 angular_velocity=float(spin),
+                centre=(float(row[0] * u.LENGTH), float(row[1] * u.LENGTH)),
             )
         centre = (
             self._welded_centre(spec) if welded else body.local_to_world(body.center_of_gravity)
@@ -214,6 +215,7 @@ class Machine:
             if welded
             else body.angle - self.rotor.angle - spec.angle_on_rotor,
             angular_velocity=spin,
+            centre=u.vec_to_si(tuple(centre), u.LENGTH),
         )
 
     def frame(self, dt: float) -> MachineFrame:

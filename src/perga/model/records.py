@@ -15,11 +15,13 @@ TINY = 1e-30
 @dataclass(frozen=True)
 class HammerState:
     """A hammer at one instant: kinetic energy ½Mv_c² + ½I_cΩ², J; swing angle α, rad; absolute
-    angular velocity Ω, rad/s (welded hammers move with the rotor: their α is the spec's)."""
+    angular velocity Ω, rad/s (welded hammers move with the rotor: their α is the spec's);
+    its centre of mass in the fixed frame, m."""
 
     energy: float
     swing_angle: float
     angular_velocity: float
+    centre: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,8 @@ class Impact:
     """The granule's angular velocity at the impact's start, rad/s (0 for a sliding point)."""
     granule_spin_after: float = math.nan
     """The granule's angular velocity at the impact's end, rad/s."""
+    hammer_centre_before: tuple[float, float] = (math.nan, math.nan)
+    """The hammer's centre of mass at the impact's start, fixed frame, m."""
     granule_velocity_after: tuple[float, float] = (math.nan, math.nan)
     """The granule's velocity in the fixed frame at the impact's end, m/s."""
     held: bool = False

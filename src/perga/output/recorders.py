@@ -150,6 +150,7 @@ SPLIT = {
     "normal": ("nx", "ny"),
     "granule_velocity_before": ("vx_before", "vy_before"),
     "granule_velocity_after": ("vx_after", "vy_after"),
+    "hammer_centre_before": ("hammer_x_before", "hammer_y_before"),
 }
 """Vector fields of the records and their columns."""
 

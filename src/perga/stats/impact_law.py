@@ -7,8 +7,10 @@ granule touches the hammer while it lasts (the log's ``other_contacts`` is 0: ri
 impact's step; soft, at its start and its end) and the granule is not held in a comb's cell;
 then the law describes it exactly for rigid contacts, and to the contact's duration for soft
 ones. Every other impact is given its regime: the reason it cannot
-match. The hammer's effective mass: hinged on a rotor of prescribed speed, pivoted about its
-hinge (its position from the rotor angle at the impact); welded to such a rotor, immovable.
+match (a held granule, other contacts, a hammer at its swing stop, a touch without approach).
+The hammer's effective mass: hinged on a rotor of prescribed speed, pivoted about its hinge
+(its position from the rotor angle at the impact); free, about its centre (recorded at the
+impact); welded to such a rotor, immovable.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import numpy as np
 
 from perga.analytic.coupled_impact import (
     coupled_impact,
+    free_compliance,
     granule_compliance,
     pivoted_compliance,
 )
@@ -73,8 +76,11 @@ def _unavailable(run: Run) -> str | None:
 def _regime(row: dict[str, float], hammer: HammerSpec) -> str:
     if row["held"]:
         return "the granule is held in the comb"
-    if hammer.mount == "free":
-        return "a free hammer (its centre is not recorded)"
+    if hammer.mount == "free" and not math.isfinite(row.get("hammer_x_before", math.nan)):
+        return "a free hammer whose centre was not recorded"
+    limit = hammer.swing_limit
+    if limit is not None and abs(row["hammer_swing_angle_before"]) >= limit - 1e-9:
+        return "the hammer at its swing stop"
     if row["other_contacts"] < 0:
         return "its other contacts were not recorded"
     if row["other_contacts"] > 0:
@@ -121,6 +127,9 @@ def check_impacts(run: Run) -> list[ImpactCheck]:
             hinge = hammer.hinge_radius * np.array([math.cos(angle), math.sin(angle)])
             arm = np.array([row["x"], row["y"]]) - hinge
             K = K + pivoted_compliance(hammer.moment_about_hinge, arm, n)
+        elif hammer.mount == "free" and math.isfinite(row["hammer_x_before"]):
+            arm = np.array([row["x"] - row["hammer_x_before"], row["y"] - row["hammer_y_before"]])
+            K = K + free_compliance(hammer.mass, hammer.moment_about_centre, arm, n)
         u_n, u_t = row["normal_velocity_before"], row["tangential_velocity_before"]
         if u_n >= 0.0:
             checks.append(_touch(i, row))

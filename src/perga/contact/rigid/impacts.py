@@ -161,6 +161,7 @@ class RigidImpactLog:
                 granule_velocity_before=u.vec_to_si(tuple(granule_velocity), u.VELOCITY),
                 hammer_swing_angle_before=hammer.swing_angle,
                 hammer_angular_velocity_before=hammer.angular_velocity,
+                hammer_centre_before=hammer.centre,
                 granule_spin_before=spin,
                 granule_spin_after=_spin(arbiter.shapes[0].body),
                 granule_velocity_after=u.vec_to_si(

@@ -302,6 +302,7 @@ class SoftImpactLog:
                     hammer_angular_velocity_before=start.hammer.angular_velocity,
                     peak_force=peak,
                     peak_pressure=pressure,
+                    hammer_centre_before=start.hammer.centre,
                     granule_spin_before=start.granule_spin,
                     granule_spin_after=float(g.w[i]),
                     granule_velocity_after=(float(g.v[i, 0]), float(g.v[i, 1])),
