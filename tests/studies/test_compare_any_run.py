@@ -85,4 +85,7 @@ def test_the_main_run_against_the_impact_law(tmp_path):
     (impacts,) = data["impacts"]
     assert impacts["isolated"] > 0.8 * impacts["impacts"] > 250
     assert "are isolated; on those the velocity after agrees" in impacts["verdict"]
+    stats = impacts["statistics"]
+    assert len(stats) == 6  # velocity, spin, restitution, slip, energy lost and given
+    assert stats["normal restitution (relative)"]["p99"] < 1e-9  # Newton's law, exactly
     assert "Impacts, one by one" in (report / "report.md").read_text()

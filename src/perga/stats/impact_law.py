@@ -60,6 +60,12 @@ class ImpactCheck:
     """The law stops the slip within its cap."""
     speed_after: tuple[float, float] = (math.nan, math.nan)
     """|v'|, m/s, simulated and law."""
+    relative_energy: float = math.nan
+    """½m|u|², the granule's kinetic energy relative to the hammer's point before, J: the scale
+    of the energy lost."""
+    lab_energy: float = math.nan
+    """½m|v'_law|², the granule's kinetic energy after in the fixed frame, J: the scale of the
+    energy given."""
 
 
 def _unavailable(run: Run) -> str | None:
@@ -166,6 +172,8 @@ def check_impacts(run: Run) -> list[ImpactCheck]:
                 granule_gain=(row["granule_energy_gain"], gain_law),
                 sticks=law.sticks,
                 speed_after=(float(np.hypot(*v1)), speed),
+                relative_energy=0.5 * m * (u_n * u_n + u_t * u_t),
+                lab_energy=0.5 * m * speed * speed,
             )
         )
     return checks

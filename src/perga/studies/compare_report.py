@@ -267,6 +267,7 @@ def impact_summary(analysis: Analysis) -> dict[str, object] | None:
     )
     return {
         "run": analysis.name,
+        "statistics": _statistics(isolated),
         "impacts": len(checks),
         "isolated": len(isolated),
         "energy_share_isolated": share_lost,
@@ -280,10 +281,53 @@ def impact_summary(analysis: Analysis) -> dict[str, object] | None:
     }
 
 
+def _scaled(pairs: list[tuple[float, float]], scales: list[float]) -> np.ndarray:
+    """|simulated − law| / scale of (simulated, law) pairs with a finite law."""
+    return np.array(
+        [abs(a - b) / s for (a, b), s in zip(pairs, scales, strict=True) if math.isfinite(b)]
+    )
+
+
+def _statistics(isolated: list) -> dict[str, dict[str, float]]:
+    """Median and 99th percentile of each compared statistic's error over the isolated
+    impacts: the velocity and spin after (impact_law's errors), the normal restitution
+    (relative), the slip's ratio (absolute), the energy lost (over the relative kinetic energy
+    before, ½m·u²) and given (over the kinetic energy after, ½m·v′²)."""
+    columns = {
+        "velocity after (over the speed after)": np.array([c.velocity_error for c in isolated]),
+        "spin after (rim speed, over the speed after)": np.array([c.spin_error for c in isolated]),
+        "normal restitution (relative)": _scaled(
+            [c.normal_restitution for c in isolated], [c.normal_restitution[1] for c in isolated]
+        ),
+        "slip ratio u_t′/u_t (absolute)": _scaled(
+            [c.tangential_ratio for c in isolated], [1.0] * len(isolated)
+        ),
+        "energy lost (over ½m·u² before)": _scaled(
+            [c.dissipated for c in isolated], [c.relative_energy for c in isolated]
+        ),
+        "energy given (over ½m·v′² after)": _scaled(
+            [c.granule_gain for c in isolated], [c.lab_energy for c in isolated]
+        ),
+    }
+    return {
+        name: {"median": float(np.median(v)), "p99": float(np.quantile(v, 0.99))}
+        for name, v in columns.items()
+        if v.size
+    }
+
+
 def _impact_section(summaries: list[dict[str, object]]) -> list[str]:
     lines = ["## Impacts, one by one", ""]
     for s in summaries:
         lines += [f"**{s['run']}**: {s['verdict']}", ""]
+        stats = s["statistics"]
+        if stats:
+            lines += ["| isolated impacts: error of | median | 99th percentile |", "|---|---|---|"]
+            lines += [
+                f"| {name} | {v['median']:.2e} | {v['p99']:.2e} |"
+                for name, v in stats.items()  # type: ignore[union-attr]
+            ]
+            lines.append("")
         lines += [
             "| worst | granule | time, s | regime | velocity error |",
             "|---|---|---|---|---|",
