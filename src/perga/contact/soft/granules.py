@@ -559,11 +559,9 @@ class SoftGranules:
 
     # --- diagnostics (NumPy, not per step) -------------------------------------------------
 
-    def _pairs(
-        self, springs: bool = False
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(i, j, overlap, list entry) of the granule pairs overlapping now (δ > 0), with
-        ``springs`` also those holding a tangential spring."""
+    def neighbour_list(self) -> None:
+        """Build the neighbour list (``start``, ``nbr``) if a build is pending (``invalidate``,
+        or no step yet), so that it holds every pair within reach now."""
         if self._rebuild and self.pairs:
             self.start, self.nbr, self.hist = build(
                 self.x, self.r, self.skin, self.start, self.nbr, self.hist
@@ -571,6 +569,13 @@ class SoftGranules:
             self.x_ref[:] = self.x
             self._forget_candidates()
             self._rebuild = False
+
+    def _pairs(
+        self, springs: bool = False
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(i, j, overlap, list entry) of the granule pairs overlapping now (δ > 0), with
+        ``springs`` also those holding a tangential spring."""
+        self.neighbour_list()
         if not self.pairs or self.start.shape[0] != self.n + 1:
             e = np.empty(0, np.int64)
             return e, e, np.empty(0), e
@@ -671,36 +676,23 @@ class SoftGranules:
         centre. Builds the neighbour list first if a build is pending (``invalidate``, or no
         step yet).
         """
-        i, j, delta, walls, active = self._touching()
-        count = self._count(i, j, walls, active)
-        overlap = np.zeros(self.n)
+        n = self.n
+        i, j, delta, _ = self._pairs()
+        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+        overlap = np.zeros(n)
         np.maximum.at(overlap, i, delta)
         np.maximum.at(overlap, j, delta)
+        walls = self._walls_overlap()
+        count += np.count_nonzero(walls > 0.0, axis=1)
         if walls.size:
             np.maximum(overlap, walls.max(axis=1), out=overlap)
+        active = self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
+        count += np.count_nonzero(active, axis=1)
         outline = self._poly[0].outline()
         for a, k in np.argwhere(active):
             d, _, _ = closest_feature(self.x[a, 0], self.x[a, 1], *outline, k)
             overlap[a] = max(overlap[a], self.r[a] - d)
         return count.astype(np.int32), overlap
-
-    def contact_totals(self) -> np.ndarray:
-        """Per granule, the number of its contacts now, (n,) int32 (those of
-        :meth:`contact_counts`, without their overlaps)."""
-        i, j, _, walls, active = self._touching()
-        return self._count(i, j, walls, active).astype(np.int32)
-
-    def _touching(self) -> tuple[np.ndarray, ...]:
-        """The granule pairs touching (i, j, their overlaps δ > 0), each granule's overlap with
-        each wall, and the polygon contacts the kernel holds active, (n, polygons) bool."""
-        i, j, delta, _ = self._pairs()
-        walls = self._walls_overlap()
-        return i, j, delta, walls, self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-
-    def _count(self, i: np.ndarray, j: np.ndarray, walls: np.ndarray, active: np.ndarray):
-        n = self.n
-        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
-        return count + np.count_nonzero(walls > 0.0, axis=1) + np.count_nonzero(active, axis=1)
 
     def max_overlap(self) -> float:
         """Largest overlap of any granule with a granule or wall, m (0 with no contact)."""

@@ -24,7 +24,7 @@ import numpy as np
 
 from perga.contact.laws.row import LINEAR
 from perga.contact.soft import SoftGranules
-from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
+from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES, WALL_CHAMBER
 from perga.contact.soft.polygon_set import (
     HIST_ACTIVE,
     HIST_DISSIPATED,
@@ -211,20 +211,14 @@ class SoftImpactLog:
     def _others(self, contacts: list[tuple[int, int]]) -> list[int]:
         """For each (granule row, polygon): the granule's contacts now but those with the
         polygon's hammer, and, if that hammer moves under contacts, the other granules' contacts
-        with it."""
+        with it (:func:`_other_contacts`)."""
         g = self._g
-        totals = g.contact_totals()
-        active = g.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-        out = []
-        for i, k in contacts:
-            pieces = self._hammer_of == self._hammer_of[k]
-            other = int(totals[i]) - int(np.count_nonzero(active[i, pieces]))
-            if self._movable[self._hammer_of[k]]:
-                other += int(np.count_nonzero(active[:, pieces])) - int(
-                    np.count_nonzero(active[i, pieces])
-                )
-            out.append(other)
-        return out
+        g.neighbour_list()
+        pairs = np.array(contacts, dtype=np.int64).reshape(-1, 2)
+        return _other_contacts(
+            pairs, self._hammer_of, self._movable, g.x, g.r, g.start, g.nbr, g.pairs,
+            g.polygon_hist[:, :, HIST_ACTIVE], g.walls, WALL_CHAMBER,
+        ).tolist()  # fmt: skip
 
     def _hammer_motion(
         self, machine: MachineState, hammer_rows: np.ndarray
@@ -310,6 +304,48 @@ class SoftImpactLog:
                     other_contacts=max(start.others, other),
                 )
             )
+
+
+@numba.njit(cache=True)
+def _other_contacts(pairs, hammer_of, movable, x, r, start, nbr, with_pairs, active, walls,
+                    chamber):  # fmt: skip
+    """For each (granule row i, polygon k) of ``pairs``: i's contacts now (granules overlapping
+    it in the neighbour list ``start``/``nbr`` if ``with_pairs``, walls it overlaps, polygons
+    whose contact is ``active``) but those with the pieces of k's hammer h, plus, if
+    ``movable[h]``, the other granules' active contacts with h's pieces."""
+    n = x.shape[0]
+    touching = np.zeros(n, np.int64)
+    wanted = np.zeros(n, np.bool_)
+    for q in range(pairs.shape[0]):
+        wanted[pairs[q, 0]] = True
+    if with_pairs and start.shape[0] == n + 1:
+        for i in range(n):
+            for p in range(start[i], start[i + 1]):
+                j = nbr[p]
+                if (wanted[i] or wanted[j]) and math.hypot(
+                    x[i, 0] - x[j, 0], x[i, 1] - x[j, 1]
+                ) < r[i] + r[j]:
+                    touching[i] += 1
+                    touching[j] += 1
+    out = np.zeros(pairs.shape[0], np.int64)
+    for q in range(pairs.shape[0]):
+        i, h = pairs[q, 0], hammer_of[pairs[q, 1]]
+        count = touching[i]
+        for s in range(walls.shape[0]):
+            a, b, c, d = walls[s, 1], walls[s, 2], walls[s, 3], walls[s, 4]
+            if walls[s, 0] == chamber:
+                count += r[i] + math.hypot(x[i, 0] - a, x[i, 1] - b) - c > 0.0
+            else:
+                count += r[i] - ((x[i, 0] - a) * c + (x[i, 1] - b) * d) > 0.0
+        for k in range(active.shape[1]):
+            if active[i, k] != 0.0 and hammer_of[k] != h:
+                count += 1
+            if movable[h] and hammer_of[k] == h:
+                for j in range(n):
+                    if j != i and active[j, k] != 0.0:
+                        count += 1
+        out[q] = count
+    return out
 
 
 @numba.njit(cache=True, fastmath=FASTMATH)
