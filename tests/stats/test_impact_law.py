@@ -37,6 +37,7 @@ def _row(u_n: float, u_t: float, v_after: tuple[float, float], **extra: float) -
         "vx_before": -u_t, "vy_before": u_n, "vx_after": v_after[0], "vy_after": v_after[1],
         "granule_spin_before": 0.0, "granule_spin_after": 0.0, "dissipated": 0.0,
         "granule_energy_gain": 0.0, "held": 0.0, "other_contacts": 0.0,
+        "hammer_x_before": 0.1, "hammer_y_before": 0.0,
     } | extra  # fmt: skip
 
 

@@ -16,7 +16,8 @@ impact); welded to such a rotor, immovable.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import Counter
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -72,8 +73,8 @@ def _unavailable(run: Run) -> str | None:
     """Why no impact of ``run`` can be predicted, or None."""
     if not run.impacts or not run.impacts["time"].size:
         return "no granule-hammer impact was recorded"
-    if "vx_after" not in run.impacts:
-        return "the impact log has no velocities after (a run made before they were recorded)"
+    if "hammer_x_before" not in run.impacts:
+        return "the impact log lacks the state after and the hammer's centre (an older run)"
     if run.case.rotor.inertia is not None:
         return "a driven rotor of finite inertia (the law here takes the rotor's speed as given)"
     return None
@@ -82,8 +83,6 @@ def _unavailable(run: Run) -> str | None:
 def _regime(row: dict[str, float], hammer: HammerSpec) -> str:
     if row["held"]:
         return "the granule is held in the comb"
-    if hammer.mount == "free" and not math.isfinite(row.get("hammer_x_before", math.nan)):
-        return "a free hammer whose centre was not recorded"
     limit = hammer.swing_limit
     if limit is not None and abs(row["hammer_swing_angle_before"]) >= limit - 1e-9:
         return "the hammer at its swing stop"
@@ -133,7 +132,7 @@ def check_impacts(run: Run) -> list[ImpactCheck]:
             hinge = hammer.hinge_radius * np.array([math.cos(angle), math.sin(angle)])
             arm = np.array([row["x"], row["y"]]) - hinge
             K = K + pivoted_compliance(hammer.moment_about_hinge, arm, n)
-        elif hammer.mount == "free" and math.isfinite(row["hammer_x_before"]):
+        elif hammer.mount == "free":
             arm = np.array([row["x"] - row["hammer_x_before"], row["y"] - row["hammer_y_before"]])
             K = K + free_compliance(hammer.mass, hammer.moment_about_centre, arm, n)
         u_n, u_t = row["normal_velocity_before"], row["tangential_velocity_before"]
@@ -177,3 +176,63 @@ def check_impacts(run: Run) -> list[ImpactCheck]:
             )
         )
     return checks
+
+
+@dataclass(frozen=True)
+class ImpactSummary:
+    """A run's checked impacts taken together (:func:`summarise`)."""
+
+    checks: list[ImpactCheck]
+    compared: list[ImpactCheck]
+    """Those the law predicts (a touch without approach is not)."""
+    isolated: list[ImpactCheck]
+    energy_share_isolated: float
+    """The isolated impacts' share of the energy lost in impacts (0 without a loss)."""
+    regimes: Counter[str] = field(default_factory=Counter)
+    """How many impacts are in each regime but ``ISOLATED``."""
+
+    @property
+    def others(self) -> str:
+        """The regimes but ``ISOLATED`` in words, most frequent first."""
+        return "; ".join(f"{n} {why}" for why, n in self.regimes.most_common()) or "none"
+
+    def worst(self, count: int) -> list[ImpactCheck]:
+        """The ``count`` compared impacts with the largest velocity errors, largest first."""
+        return sorted(self.compared, key=lambda c: -c.velocity_error)[:count]
+
+    def statistics(self) -> dict[str, dict[str, float]]:
+        """Median and 99th percentile of each compared statistic's error over the isolated
+        impacts: the velocity and spin after (:class:`ImpactCheck`'s errors), the normal
+        restitution (relative), the slip's ratio (absolute), the energy lost (over the relative
+        kinetic energy before, ½m·u²) and given (over the kinetic energy after, ½m·v′²)."""
+        iso = self.isolated
+        columns = {
+            "velocity after (over the speed after)": [(c.velocity_error, 0.0, 1.0) for c in iso],
+            "spin after (rim speed, over the speed after)": [(c.spin_error, 0.0, 1.0) for c in iso],
+            "normal restitution (relative)": [
+                (*c.normal_restitution, c.normal_restitution[1]) for c in iso
+            ],
+            "slip ratio u_t′/u_t (absolute)": [(*c.tangential_ratio, 1.0) for c in iso],
+            "energy lost (over ½m·u² before)": [(*c.dissipated, c.relative_energy) for c in iso],
+            "energy given (over ½m·v′² after)": [(*c.granule_gain, c.lab_energy) for c in iso],
+        }
+        out = {}
+        for name, rows in columns.items():
+            errors = np.array([abs(a - b) / scale for a, b, scale in rows if math.isfinite(b)])
+            if errors.size:
+                out[name] = {
+                    "median": float(np.median(errors)),
+                    "p99": float(np.quantile(errors, 0.99)),
+                }
+        return out
+
+
+def summarise(checks: list[ImpactCheck]) -> ImpactSummary:
+    """``checks`` taken together: which are compared and isolated, the isolated impacts'
+    share of the energy lost in impacts, the other regimes."""
+    compared = [c for c in checks if math.isfinite(c.velocity_error)]
+    isolated = [c for c in compared if c.regime == ISOLATED]
+    lost = sum(abs(c.dissipated[0]) for c in checks)
+    share = sum(abs(c.dissipated[0]) for c in isolated) / lost if lost else 0.0
+    regimes = Counter(c.regime for c in checks if c.regime != ISOLATED)
+    return ImpactSummary(checks, compared, isolated, share, regimes)

@@ -20,7 +20,6 @@ says by how much and why). Runs are recognised by their case:
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Literal
@@ -31,7 +30,7 @@ from perga.analytic.impact import impact_efficiencies
 from perga.analytic.paper import PaperRadialMotion, paper_cumulative_loss, paper_roots
 from perga.analytic.sliding import BladeSlide, LinearSlide
 from perga.stats.energy import all_impacts, hinged_prediction, successive_energies
-from perga.stats.impact_law import ISOLATED, ImpactCheck, check_impacts
+from perga.stats.impact_law import ISOLATED, ImpactCheck, check_impacts, summarise
 from perga.stats.sweeps import blade_exit, blade_tip, efficiency_point
 from perga.stats.tables import Run
 from perga.stats.trajectory import amplitude_left, blade_frame, fit_exponential, free_flight
@@ -599,13 +598,11 @@ def _impact_law_rows(run: Run, a: Analysis) -> list[ImpactCheck]:
         a.cannot(run, statistic, str(reason).split(": ", 1)[-1])
         return []
     a.series["impact_checks"] = checks
-    compared = [c for c in checks if math.isfinite(c.velocity_error)]
-    isolated = [c for c in compared if c.regime == ISOLATED]
-    regimes = Counter(c.regime for c in checks if c.regime != ISOLATED)
-    others = "; ".join(f"{n} {why}" for why, n in regimes.most_common()) or "none"
+    summary = summarise(checks)
+    isolated, others = summary.isolated, summary.others
     model = "coupled_impact (Coulomb friction, sticking cap, the hammer's effective mass)"
     rigid = run.case.contact_model.kind == "rigid"
-    sample = isolated or compared
+    sample = isolated or summary.compared
     if not sample:
         a.cannot(
             run, "every impact against the impact law with friction", f"none compared: {others}"
@@ -613,14 +610,12 @@ def _impact_law_rows(run: Run, a: Analysis) -> list[ImpactCheck]:
         return checks
     errors = np.array([c.velocity_error for c in sample])
     worst = sample[int(np.argmax(errors))]
-    lost = sum(abs(c.dissipated[0]) for c in checks)
-    share_lost = sum(abs(c.dissipated[0]) for c in isolated) / lost if lost else 0.0
     spread = (
-        f"{len(isolated)} of {len(checks)} impacts isolated, {share_lost:.1%} of the energy lost "
-        f"in impacts; velocity error median {np.median(errors):.2e}, 90th percentile "
-        f"{np.quantile(errors, 0.9):.2e}, 99th {np.quantile(errors, 0.99):.2e}, worst "
-        f"{worst.velocity_error:.2e} (granule {worst.granule} at {worst.time:.5g} s); not "
-        f"isolated: {others}"
+        f"{len(isolated)} of {len(checks)} impacts isolated, "
+        f"{summary.energy_share_isolated:.1%} of the energy lost in impacts; velocity error "
+        f"median {np.median(errors):.2e}, 90th percentile {np.quantile(errors, 0.9):.2e}, 99th "
+        f"{np.quantile(errors, 0.99):.2e}, worst {worst.velocity_error:.2e} (granule "
+        f"{worst.granule} at {worst.time:.5g} s); not isolated: {others}"
     )
     which = "isolated" if isolated else "(none isolated: all)"
     if rigid and isolated:

@@ -18,7 +18,7 @@ import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
 from perga.output.figures import new_figure, save
-from perga.stats.impact_law import ISOLATED
+from perga.stats.impact_law import ISOLATED, summarise
 from perga.studies.compare import Analysis, Row, Unavailable
 from perga.studies.paper_check import Params
 
@@ -239,80 +239,42 @@ def impact_errors(analyses: list[Analysis], _paper: Params | None, path: Path) -
 
 
 def impact_summary(analysis: Analysis) -> dict[str, object] | None:
-    """The impacts of one analysed run against the law: counts, shares, quantiles of the
-    velocity error, the five worst with their regime, and a verdict in words; None without
+    """The impacts of one analysed run against the law (:func:`~perga.stats.impact_law.
+    summarise`): counts, shares, quantiles of the isolated impacts' velocity error and of every
+    statistic's, the five worst with their regime, and a verdict in words; None without
     checked impacts."""
     checks = analysis.series.get("impact_checks")
     if not checks:
         return None
-    isolated = [c for c in checks if c.regime == ISOLATED]
-    lost = sum(abs(c.dissipated[0]) for c in checks)
-    share_lost = sum(abs(c.dissipated[0]) for c in isolated) / lost if lost else 0.0
-    errors = np.array([c.velocity_error for c in isolated])
+    summary = summarise(checks)
+    errors = np.array([c.velocity_error for c in summary.isolated])
     quantiles = (
         {q: float(np.quantile(errors, q)) for q in (0.5, 0.9, 0.99, 1.0)} if errors.size else {}
     )
-    within = float(np.mean(errors <= 0.01)) if errors.size else math.nan
-    compared = [c for c in checks if math.isfinite(c.velocity_error)]
-    worst = sorted(compared, key=lambda c: -c.velocity_error)[:5]
+    within = float(np.mean(errors <= 0.01)) if errors.size else None
     verdict = (
-        f"{len(isolated) / len(checks):.0%} of {len(checks)} impacts, carrying {share_lost:.0%} "
-        "of the energy lost in impacts, are isolated"
+        f"{len(summary.isolated) / len(checks):.0%} of {len(checks)} impacts, carrying "
+        f"{summary.energy_share_isolated:.0%} of the energy lost in impacts, are isolated"
         + (
             f"; on those the velocity after agrees with the law within 1 % in {within:.1%} "
             f"(median error {quantiles[0.5]:.2e}, worst {quantiles[1.0]:.2e})."
-            if errors.size
+            if within is not None
             else "."
         )
     )
     return {
         "run": analysis.name,
-        "statistics": _statistics(isolated),
+        "statistics": summary.statistics(),
         "impacts": len(checks),
-        "isolated": len(isolated),
-        "energy_share_isolated": share_lost,
-        "within_1_percent": within if errors.size else None,
+        "isolated": len(summary.isolated),
+        "energy_share_isolated": summary.energy_share_isolated,
+        "within_1_percent": within,
         "error_quantiles": {str(q): v for q, v in quantiles.items()},
         "worst": [
             {"granule": c.granule, "time": c.time, "regime": c.regime, "error": c.velocity_error}
-            for c in worst
+            for c in summary.worst(5)
         ],
         "verdict": verdict,
-    }
-
-
-def _scaled(pairs: list[tuple[float, float]], scales: list[float]) -> np.ndarray:
-    """|simulated − law| / scale of (simulated, law) pairs with a finite law."""
-    return np.array(
-        [abs(a - b) / s for (a, b), s in zip(pairs, scales, strict=True) if math.isfinite(b)]
-    )
-
-
-def _statistics(isolated: list) -> dict[str, dict[str, float]]:
-    """Median and 99th percentile of each compared statistic's error over the isolated
-    impacts: the velocity and spin after (impact_law's errors), the normal restitution
-    (relative), the slip's ratio (absolute), the energy lost (over the relative kinetic energy
-    before, ½m·u²) and given (over the kinetic energy after, ½m·v′²)."""
-    columns = {
-        "velocity after (over the speed after)": np.array([c.velocity_error for c in isolated]),
-        "spin after (rim speed, over the speed after)": np.array([c.spin_error for c in isolated]),
-        "normal restitution (relative)": _scaled(
-            [c.normal_restitution for c in isolated], [c.normal_restitution[1] for c in isolated]
-        ),
-        "slip ratio u_t′/u_t (absolute)": _scaled(
-            [c.tangential_ratio for c in isolated], [1.0] * len(isolated)
-        ),
-        "energy lost (over ½m·u² before)": _scaled(
-            [c.dissipated for c in isolated], [c.relative_energy for c in isolated]
-        ),
-        "energy given (over ½m·v′² after)": _scaled(
-            [c.granule_gain for c in isolated], [c.lab_energy for c in isolated]
-        ),
-    }
-    return {
-        name: {"median": float(np.median(v)), "p99": float(np.quantile(v, 0.99))}
-        for name, v in columns.items()
-        if v.size
     }
 
 

@@ -50,18 +50,15 @@ def _other_contacts(arbiter: pymunk.Arbiter) -> int:
     """Touching contacts in this step on the granule, and on the hammer unless its body moves
     as prescribed (kinematic: no contact changes its motion), but those of this granule with
     this hammer body (its other pieces belong to this impact)."""
-    pair = {shape.body for shape in arbiter.shapes}
-    others: list[pymunk.Arbiter] = []
-
-    def visit(other: pymunk.Arbiter) -> None:
-        if other.contact_point_set.points and {s.body for s in other.shapes} != pair:
-            others.append(other)
-
     granule, hammer = (shape.body for shape in arbiter.shapes)
-    granule.each_arbiter(visit)
+    touching: list[pymunk.Arbiter] = []
+    granule.each_arbiter(touching.append)
     if hammer.body_type == pymunk.Body.DYNAMIC:
-        hammer.each_arbiter(visit)
-    return len(others)
+        hammer.each_arbiter(touching.append)
+    pair = {granule, hammer}
+    return sum(
+        bool(a.contact_point_set.points) and {s.body for s in a.shapes} != pair for a in touching
+    )
 
 
 _Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, float, HammerState]
