@@ -44,7 +44,7 @@ kinetic energy, contacts per granule, largest overlap, the RMS distance between 
 codes' granule positions.
 
     python benchmarks/dem_peers.py --quick        # ~1.5 min, 2 idle cores (fewer steps, blocks)
-    python benchmarks/dem_peers.py                # 12.5 min at load 1-6 (docs/performance.md)
+    python benchmarks/dem_peers.py                # 12.5 min at load 1-6 (docs/dev/performance.md)
     python benchmarks/dem_peers.py --cases bed --sizes 10000 --blocks 5
 
 The beds are generated on first use and cached (``beds.py``: 9 min for 10,000 granules, loaded

@@ -1,4 +1,4 @@
-"""Mutation testing of perga's pure-Python physics with cosmic-ray (docs/testing.md).
+"""Mutation testing of perga's pure-Python physics with cosmic-ray (docs/dev/testing.md).
 
 Each module of ``MODULES`` is mutated by cosmic-ray (one mutant at a time, the file rewritten in
 place and restored, the module's fast tests run in a fresh process, sequentially on one core),
@@ -48,7 +48,7 @@ class Module:
 MODULES = {
     "impact": Module("src/perga/analytic/impact.py", ("tests/analytic/test_impact.py",)),
     # 60 s, 16x the unmutated run (3.3-3.8 s): at 10 s, 141 mutants timed out unchecked
-    # (docs/testing.md); many mutants of the Hertz-Tsuji integration never end
+    # (docs/dev/testing.md); many mutants of the Hertz-Tsuji integration never end
     "contact": Module("src/perga/analytic/contact.py", ("tests/analytic/test_contact.py",), 60.0),
     "laws": Module(
         "src/perga/contact/soft/laws.py",
@@ -649,7 +649,7 @@ def sample(name: str, seed: int, slow: float, wanted: int) -> None:
     one (a temporary copy of ``src/`` as committed) with the module's test command and
     ``timeout``, timing each, until ``wanted`` of them have run longer than ``slow`` seconds;
     print one JSON line per mutant. For timeouts counted at a shorter limit whose session was
-    not kept (docs/testing.md: contact's). Makes a fresh session if none is kept."""
+    not kept (docs/dev/testing.md: contact's). Makes a fresh session if none is kept."""
     import random
     import time
 

@@ -394,7 +394,7 @@ def test_no_private_member_of_another_package_is_read() -> None:
 def test_a_run_does_not_load_the_mesh_libraries() -> None:
     """trimesh and scipy.stats are imported where a mesh is read or cut, or a size
     distribution drawn, not by the modules every run loads: together they cost 0.35-0.6 s of
-    each run's start (docs/performance.md)."""
+    each run's start (docs/dev/performance.md)."""
     code = (
         "import sys, perga.run, perga.case, perga.output.vtk, perga.engine, perga.geometry;"
         "print(sorted(m for m in ('trimesh', 'scipy.stats') if m in sys.modules))"

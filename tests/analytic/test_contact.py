@@ -325,7 +325,7 @@ def test_laws_are_frozen() -> None:
         law.k = 2e3  # type: ignore[misc]
 
 
-# --- added by the mutation run (docs/testing.md) ------------------------------------------
+# --- added by the mutation run (docs/dev/testing.md) ------------------------------------------
 
 
 def test_force_end_rejects_critical_damping() -> None:

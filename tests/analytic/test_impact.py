@@ -511,7 +511,7 @@ def test_paper_energy_change() -> None:
         paper_energy_change(1.0, (1.0, 2.0), (1.0, 2.0, 3.0))
 
 
-# --- added by the mutation run (docs/testing.md) ------------------------------------------
+# --- added by the mutation run (docs/dev/testing.md) ------------------------------------------
 
 
 def test_centre_of_percussion_rejects_a_bad_lever_arm() -> None:

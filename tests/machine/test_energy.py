@@ -239,7 +239,7 @@ def test_drive_work_while_the_rotor_speed_changes() -> None:
     assert abs(sim.energy().closure) < 1e-9
 
 
-# --- added by the mutation run (docs/testing.md) ------------------------------------------
+# --- added by the mutation run (docs/dev/testing.md) ------------------------------------------
 
 
 def test_the_residual_books_every_term_with_its_sign() -> None:

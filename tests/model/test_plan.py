@@ -155,7 +155,7 @@ def test_the_rotation_and_contact_checks_on_both_sides_of_their_limits(
         validated(path, overrides=[dt])
 
 
-# --- added by the mutation run (docs/testing.md) ------------------------------------------
+# --- added by the mutation run (docs/dev/testing.md) ------------------------------------------
 
 
 def test_hammer_effective_mass_of_free_and_welded_hammers(tmp_path):

@@ -815,7 +815,7 @@ class Output(Strict):
         "csv",
         description="format of the granule table: 'csv' (granules.csv) or 'parquet' (the "
         "Parquet dataset granules.parquet/, one part per 2^20 rows, for large runs: smaller, "
-        "faster to write and to read (docs/performance.md); parts are written when "
+        "faster to write and to read (docs/dev/performance.md); parts are written when "
         "full and at the end, so a killed run loses the part in memory; perga.output.tables)",
     )
     checkpoint_every: float = Field(

@@ -26,7 +26,7 @@ import numpy as np
 
 FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 """LLVM fast-math flags of perga's compiled kernels: all but ``nnan`` and ``ninf`` (an infinite
-speed cap and NaN checks must keep their meaning); docs/performance.md has the gain."""
+speed cap and NaN checks must keep their meaning); docs/dev/performance.md has the gain."""
 
 CORNER, SMOOTH_JOINT = 1, 2
 """Kinds of outline vertices (``corner[:, 2]``, module doc)."""

@@ -5,7 +5,7 @@ machine's few bodies are read raw instead (:class:`~perga.machine.chipmunk_state
 
 Reading ``body.position`` for every body in a Python loop costs an attribute access per
 body; ``pymunk.batch.get_space_bodies`` copies the same numbers out of Chipmunk in one C pass
-(docs/performance.md has the gain). The batch API is experimental, so it is wrapped here and
+(docs/dev/performance.md has the gain). The batch API is experimental, so it is wrapped here and
 nowhere else, with these properties:
 
 * **It cannot select bodies.** ``get_space_bodies`` walks Chipmunk's body arrays: every

@@ -219,7 +219,7 @@ def _call_space_step(typingctx, function, space, dt):
 def space_step(function: int, space: int, dt: float) -> None:
     """Chipmunk's step of ``space`` by ``dt`` (internal time units) through the addresses of
     :func:`raw_space_step`; what pymunk's ``Space.step`` does while that gives addresses, with
-    less overhead a call (docs/performance.md). In Python (numba's JIT off) through ctypes."""
+    less overhead a call (docs/dev/performance.md). In Python (numba's JIT off) through ctypes."""
     ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_double)(int(function))(int(space), dt)
 
 
@@ -261,7 +261,7 @@ class _StructViews:
     def addresses(self) -> NDArray[np.uint64]:
         """The address of each view's first double, in their order, for compiled code to read
         and write through (:func:`doubles_at`): one array passes to a compiled function in a
-        third of the time a tuple of views takes (docs/performance.md)."""
+        third of the time a tuple of views takes (docs/dev/performance.md)."""
         if self._addresses is None:
             self._addresses = np.array([v.ctypes.data for v in self.views()], dtype=np.uint64)
         return self._addresses

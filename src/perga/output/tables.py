@@ -37,7 +37,7 @@ def _arrow_block(columns: Sequence[np.ndarray], names: Sequence[str]) -> pa.Tabl
 def _arrow_array(values: np.ndarray) -> pa.Array:
     """``values`` as an Arrow array: fixed-width numbers as a view of their memory, booleans
     bit-packed, anything else through ``pa.array``, which on a numpy array imports pandas where
-    it is installed (0.3 s a process, docs/performance.md)."""
+    it is installed (0.3 s a process, docs/dev/performance.md)."""
     if values.ndim == 1 and values.dtype == np.bool_:
         bits = pa.py_buffer(np.packbits(values, bitorder="little"))
         return pa.Array.from_buffers(pa.bool_(), len(values), [None, bits])
@@ -154,7 +154,7 @@ class ParquetTable(_Closable):
     (a temporary file renamed), and the rest at :meth:`close`: parts on disk are always
     complete, and what a killed process had not written yet is lost (at most one part). Chosen
     over one Parquet file (unreadable until its footer is written at the end) and over CSV for
-    size and speed (docs/performance.md)."""
+    size and speed (docs/dev/performance.md)."""
 
     def __init__(self, path: Path, columns: Sequence[str]) -> None:
         self.path = path

@@ -97,7 +97,7 @@ class PvdSeries:
     later frame overwrites the closing tags with its entry and the closing tags, in one
     ``pwrite`` (one system call, which a killed process cannot leave half done). Rewriting the
     whole index through a temporary file and a rename, as before, created two files a frame;
-    on this machine's file system a file creation costs about 1 ms (docs/performance.md)."""
+    on this machine's file system a file creation costs about 1 ms (docs/dev/performance.md)."""
 
     def __init__(self, directory: Path, name: str, comment: str = "") -> None:
         self.directory = directory

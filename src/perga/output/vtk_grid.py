@@ -6,7 +6,7 @@ writes it with VTK's XML writer, binary data zlib-compressed inline (base64) in 
 ``DataArray``, the layout pyvista writes (ParaView reads every layout; meshio 5.3 misreads the
 raw appended one, whose offsets VTK pads with spaces: meshio issue #1135). VTK is called
 directly rather than through pyvista, whose objects cost about 1.5 ms more per 300-granule frame
-to build and save than the write itself (docs/performance.md); the files hold the same arrays.
+to build and save than the write itself (docs/dev/performance.md); the files hold the same arrays.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ VERTEX, POLY_LINE, POLYGON, TRIANGLE = VTK_VERTEX, VTK_POLY_LINE, VTK_POLYGON, V
 """The cell types perga writes."""
 ZLIB_LEVEL = 1
 """zlib's fastest level: a 300-granule frame 1 % larger than at VTK's default (5), written in
-0.6 ms less (docs/performance.md)."""
+0.6 ms less (docs/dev/performance.md)."""
 
 
 def grid(
@@ -82,7 +82,7 @@ def save(mesh: vtkUnstructuredGrid, path: Path) -> None:
     the file into memory and perga writes it to disk whole (:func:`~perga.output.files.
     write_new`): VTK's own file writing crashed the process (a segmentation fault, a corrupted
     heap) when a disk filled up in the middle of a file, and was slower than writing into
-    memory (docs/performance.md). A failed write leaves no file and raises OSError."""
+    memory (docs/dev/performance.md). A failed write leaves no file and raises OSError."""
     writer = vtkXMLUnstructuredGridWriter()
     writer.SetInputData(mesh)
     writer.SetDataModeToBinary()

@@ -782,7 +782,7 @@ def test_8_impact_of_discs_of_different_sizes(ratio, model, e):
                 assert w_b == pytest.approx(change_b, abs=tol_b)
 
 
-# --- Added by the mutation run (docs/testing.md): the tangential law and rolling, one step ----
+# --- Added by the mutation run (docs/dev/testing.md): the tangential law and rolling, one step ----
 
 # (hertz, k_t N/m, ζ_t, ξ m, v_t m/s, F_n N) with f = 0.5: sticking (|trial| < f F_n) and
 # sliding, undamped and damped, linear and Hertz, and a soft linear spring (k_t < 1 N/m) sliding

@@ -99,7 +99,7 @@ def test_dissipation_equals_kinetic_energy_lost(model, kind):
     assert worst[1.0 / 50.0] >= 3.0 * worst[1.0 / 100.0]
 
 
-# --- Added by the mutation run (docs/testing.md) ---------------------------------------------
+# --- Added by the mutation run (docs/dev/testing.md) ---------------------------------------------
 
 
 def test_a_contact_acts_from_half_a_step_before_first_touch():

@@ -12,7 +12,7 @@ of every shape and the collision handlers, added to a machine's space.
   gives 1 on it and the pair value on the others; granule-granule pairs take √), to within
   1 ulp; only a pair the table cannot split this way gets a ``pre_solve`` handler that sets
   ``arbiter.restitution`` and ``arbiter.friction`` (Chipmunk resets them to the product every
-  step, so it must be ``pre_solve``, not ``begin``; docs/performance.md has its cost).
+  step, so it must be ``pre_solve``, not ``begin``; docs/dev/performance.md has its cost).
   Collision types are one per (kind, material). Each handler phase runs a list of listeners
   (:meth:`RigidBodies.listen`), so that the pair setter and the impact recorder can share one
   handler.

@@ -460,7 +460,7 @@ class SoftGranules:
             raise ValueError("polygon_hist does not match the granules and polygons")
         held = held_threads() == self.threads  # a run's block holds the count: no need to ask
         previous = self.threads if held else numba.get_num_threads()
-        switch = previous != self.threads  # set_num_threads costs time (docs/performance.md)
+        switch = previous != self.threads  # set_num_threads costs time (docs/dev/performance.md)
         if switch:
             numba.set_num_threads(self.threads)
         try:

@@ -94,7 +94,7 @@ the results depend on n_chunks and never on the threads (``perga.contact.soft.th
 them one after the other in functions without a parallel region (``_pair_forces_serial``,
 ``_integrate_serial``), with the same arithmetic: opening a region costs microseconds per step
 even on one thread, which a small system pays many times over. Both share one body
-(``_advance``, inlined), so each compiles only its own passes (docs/performance.md).
+(``_advance``, inlined), so each compiles only its own passes (docs/dev/performance.md).
 Everything else is per granule; polygon loads and their dissipation are summed per
 candidate entry in a fixed order afterwards, so they and the granules' polygon forces do not
 depend on the number of threads.
@@ -144,7 +144,7 @@ from perga.machine.effects import floor_kick
 
 # ``_pair_forces_serial`` and ``_integrate_serial`` hold no prange but are compiled as the
 # parallel loops' bodies are (parallel=True, error_model="numpy"): without parallel=True numba
-# compiles the same loops to slower code (docs/performance.md), and with numba's error
+# compiles the same loops to slower code (docs/dev/performance.md), and with numba's error
 # model of parallel regions their arithmetic is the same bit for bit (one thread then agrees
 # with two where the sums do not depend on the thread count). Numba warns that nothing could be
 # parallelised.
@@ -304,7 +304,7 @@ def pair_force(
     or tangential damping; if not, the tangential law is skipped (its force is zero and its
     spring stays empty). rolling: whether any pair of the table has rolling resistance; if so,
     it is computed for a pair with μ_r > 0 (a flag for the whole table lets the compiler drop the
-    per-pair test where nothing rolls, docs/performance.md)."""
+    per-pair test where nothing rolls, docs/dev/performance.md)."""
     h = 0.5 * dt
     if d2 > far * far:
         xi = hist[k]
@@ -386,7 +386,7 @@ def _pair_range(
     ``pair_force``, whose zeros would otherwise be added. Numba wraps a negative index around unless
     the compiler can prove it non-negative, so i starts at max(lo, 0) and an entry j < 0 (there is
     none) is skipped: the wraparound is then dropped from every index below
-    (docs/performance.md). The row of a granule flagged ``coasting.COAST`` in flags (n,) is
+    (docs/dev/performance.md). The row of a granule flagged ``coasting.COAST`` in flags (n,) is
     skipped: none of its pairs can come within reach (``perga.contact.soft.coasting``)."""
     dissipated = 0.0
     for i in range(max(lo, 0), hi):
@@ -429,7 +429,7 @@ def pair_forces(
     torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
-    (docs/performance.md); reach (m), tangential and rolling: as in ``pair_force``; flags (n,)
+    (docs/dev/performance.md); reach (m), tangential and rolling: as in ``pair_force``; flags (n,)
     int8: the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
     chunk runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
@@ -590,7 +590,7 @@ def _integrate_free(
     unflagged ones in increasing order (empty otherwise): the loop takes them from it instead
     of testing every granule's flag, a branch the coasting granules would make unpredictable.
     A function of its own, not inlined: the small loop compiles tighter than inside the full
-    path's function (docs/performance.md). Compiled as the passes are (parallel=True,
+    path's function (docs/dev/performance.md). Compiled as the passes are (parallel=True,
     error_model="numpy": the same arithmetic)."""
     dmax = 0.0
     smax = 0.0
@@ -810,7 +810,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     The bundles are those of the module doc; each may also be a plain tuple in its fields' order
     (``tuple(bundle)``, for ``Polygons`` its parts too): numba types a named-tuple argument by
     its class and field names on every call, which costs more than the kernel on small systems
-    (docs/performance.md), so ``SoftGranules.step`` passes plain tuples.
+    (docs/dev/performance.md), so ``SoftGranules.step`` passes plain tuples.
 
     Before its first step the call does what opening (``Opening``) asks: the floor kick, then
     the copy of the state. work.acc must hold zeros, as ``new_accumulator`` makes it: the pair
@@ -1040,7 +1040,7 @@ def _open(granules, m, poly, opening):
 def _copy(source, target):
     """Copy the C-contiguous array ``source`` into ``target`` of its shape, as one flat loop
     (numba's ``target[:] = source`` of a 2-D array indexes every element: slower,
-    docs/performance.md)."""
+    docs/dev/performance.md)."""
     a = source.reshape(-1)
     b = target.reshape(-1)
     for k in range(a.size):

@@ -78,7 +78,7 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     does not depend on where in a step first touch falls (docs/validation.md).
 
     Dissipated energy over the step, J (< 0 only sliding with a dashpot above the cap, whose
-    rescaled spring stores more than the work; docs/testing.md): normal (F_n − F_spring)·δ̇·dt
+    rescaled spring stores more than the work; docs/dev/testing.md): normal (F_n − F_spring)·δ̇·dt
     (the dashpot's work, and the spring energy lost while F_n is clamped at 0) plus tangential
     −F_t v_t dt − ΔE_t (slip, damping, the spring's O(dt²) update), E_t (``tangential_force``).
     """

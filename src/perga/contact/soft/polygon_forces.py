@@ -175,7 +175,7 @@ def _acting_contact(
     and vt, m/s; contact point (px, py), m; normal (nx, ny); lever arm, m; active: the contact
     acted in the last step); updates hist[i, k]. Returns (fx, fy, tq, tq_poly, dissipated) as
     ``polygon_contact``. Not inlined: the test before it runs for every candidate pair and
-    compiles to a tighter loop without this body (docs/performance.md). Compiled with the error
+    compiles to a tighter loop without this body (docs/dev/performance.md). Compiled with the error
     model of the parallel passes that call it; called, its force cannot be fused into the
     caller's sums, so its floats may differ in the last bit from an inlined law's."""
     com, kind = poly.com, poly.kind
@@ -418,7 +418,7 @@ def candidates(x_ref, r, poly, rho, hist, reach):
     for i in range(n):  # not a slice copy: numba would make each a parallel region
         for q in range(count[i]):
             cpoly[start[i] + q] = found[i, q]
-    return start, cpoly  # not a Candidates with its loads: slower (docs/performance.md)
+    return start, cpoly  # not a Candidates with its loads: slower (docs/dev/performance.md)
 
 
 @nb.njit(cache=True)

@@ -20,7 +20,7 @@ def add_pair_forces(acc, i, fx, fy, t):
     """(fx, fy, t) plus granule i's pair force and torque from each chunk of acc (n_chunks, n,
     3), in chunk order; zeroes those rows for the next pair pass. One chunk (one thread) is
     added without the loop over chunks: the per-granule loop then compiles tighter
-    (docs/performance.md)."""
+    (docs/dev/performance.md)."""
     if acc.shape[0] == 1:
         fx += acc[0, i, 0]
         fy += acc[0, i, 1]

@@ -12,7 +12,7 @@ a Dask worker.
 Each kernel step opens several parallel regions, each with a launch cost; below
 ``THREADED_FROM`` granules that costs more than a second thread gains, and on a busy machine a
 second thread that has no free core to run on makes a step many times slower
-(docs/performance.md).
+(docs/dev/performance.md).
 """
 
 from __future__ import annotations
@@ -24,12 +24,12 @@ from contextlib import contextmanager
 import numba
 
 THREADED_FROM = 4000
-"""Granule count from which "auto" splits the work (docs/performance.md)."""
+"""Granule count from which "auto" splits the work (docs/dev/performance.md)."""
 RECHECK = 1.0
 """Wall seconds between a run's looks at the free cores (a job started or ended meanwhile)."""
 AUTO_CHUNKS = 2
 """Chunks of "auto" from ``THREADED_FROM`` granules: the gain measured on two cores
-(docs/performance.md); more threads need ``solver.threads``."""
+(docs/dev/performance.md); more threads need ``solver.threads``."""
 
 
 def kernel_chunks(requested: int | None, granules: int) -> int:
@@ -53,7 +53,7 @@ _local = threading.local()
 def numba_threads(threads: int) -> Iterator[None]:
     """Run the block's compiled parallel loops on ``threads`` threads, then restore the count.
     Everything parallel a soft run calls goes through here or ``SoftGranules.step``: a parallel
-    loop on a second thread that has no free core waits for one (docs/performance.md). Inside
+    loop on a second thread that has no free core waits for one (docs/dev/performance.md). Inside
     the block ``held_threads()`` is ``threads``: a kernel call that needs that count then takes
     it as set, without asking numba."""
     previous = numba.get_num_threads()
