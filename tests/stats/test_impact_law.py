@@ -46,7 +46,8 @@ def test_a_hand_built_table_gives_the_known_answers() -> None:
     J_n = (1 + e)·m·2, J_t = −0.3·m/3 (a disc's slip compliance 3/m), so the centre leaves
     at v_n' = 1.2 m/s and v_t' = 0.3 − 0.1 = 0.2 m/s along t (−x). A row recorded with that
     velocity agrees to rounding; one 2 % off along t errs by 2 %·0.2/|v'|; a held granule, one
-    with another contact, one not counted (−1) and a touch (u_n >= 0) get their regimes."""
+    with another contact (two, one: both sides of isolation's limit), one not counted (−1) and a
+    touch (u_n >= 0) get their regimes."""
     v_after = (-0.2, 1.2)  # t = −x
     rows = [
         _row(-2.0, 0.3, v_after),
@@ -55,6 +56,7 @@ def test_a_hand_built_table_gives_the_known_answers() -> None:
         _row(-2.0, 0.3, v_after, other_contacts=2.0),
         _row(-2.0, 0.3, v_after, other_contacts=-1.0),
         _row(0.01, 0.3, v_after),
+        _row(-2.0, 0.3, v_after, other_contacts=1.0),
     ]
     checks = check_impacts(_hand_built(rows))
     assert checks[0].regime == ISOLATED and checks[0].sticks
@@ -66,6 +68,7 @@ def test_a_hand_built_table_gives_the_known_answers() -> None:
         "2 other contacts during the impact",
         "its other contacts were not recorded",
         "no approach (u_n >= 0): a touch, not an impact",
+        "1 other contact during the impact",
     ]
     assert math.isnan(checks[5].velocity_error)
 

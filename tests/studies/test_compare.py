@@ -1,7 +1,7 @@
 """``perga compare --paper``: the report for the bundled paper cases, every figure and table,
 and the 1 % agreement wherever simulation and analytical model describe the same physics.
 
-The tolerance is the issue's 1 % (perga.studies.compare.AGREEMENT): the rigid engine reproduces
+The tolerance is the issue's 1 % (perga.studies.compare_rows.AGREEMENT): the rigid engine reproduces
 the closed forms to 1e-4-5e-4 at the bundled steps (docs/validation.md), so a modelling or
 bookkeeping error shows; regimes that differ are reported, not asserted to agree. One report is
 generated per session (under a minute on two cores); its runs are study jobs on the executor, found
@@ -17,8 +17,8 @@ import pytest
 
 from perga.cli import main
 from perga.studies import executor
-from perga.studies.compare import AGREEMENT
 from perga.studies.compare_report import FIGURES
+from perga.studies.compare_rows import AGREEMENT
 from perga.studies.jobs import ROW
 from perga.studies.paper_runs import paper_job, paper_jobs, run_paper_study
 

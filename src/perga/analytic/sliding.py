@@ -191,7 +191,7 @@ class BladeSlide:
     def _side(self) -> int:
         return 1 if self.face == "leading" else -1
 
-    def _floor_force(self, x: float, v: float) -> tuple[float, float]:
+    def floor_force(self, x: float, v: float) -> tuple[float, float]:
         """Floor friction per unit mass in the rotating basis, m/s²."""
         if self.floor == "none" or self.floor_friction == 0:
             return 0.0, 0.0
@@ -204,7 +204,7 @@ class BladeSlide:
 
     def normal_per_mass(self, x: float, v: float) -> float:
         """N/m, m/s²: the face reaction needed to keep the granule on the face."""
-        _, fy = self._floor_force(x, v)
+        _, fy = self.floor_force(x, v)
         w = self.omega
         return self._side * (2 * w * v - w**2 * self.offset - fy)
 
@@ -213,7 +213,7 @@ class BladeSlide:
         w = self.omega
         if self.inertia_factor is not None:
             return w**2 * x / (1 + self.inertia_factor)
-        fx, _ = self._floor_force(x, v)
+        fx, _ = self.floor_force(x, v)
         friction = self.face_friction * max(self.normal_per_mass(x, v), 0.0) * float(np.sign(v))
         return w**2 * x + fx - friction
 
@@ -244,7 +244,7 @@ class BladeSlide:
 
     def _drive(self, x: float) -> float:
         """Force per unit mass along the face on a granule at rest there, less static friction."""
-        fx, _ = self._floor_force(x, 0.0)
+        fx, _ = self.floor_force(x, 0.0)
         return self.omega**2 * x + fx
 
     def _static_hold(self, x: float) -> bool:

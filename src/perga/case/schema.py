@@ -807,7 +807,8 @@ class Output(Strict):
         Literal["granules", "hammers", "impacts", "energy", "releases", "outflow", "vtk"], ...
     ] = Field(
         ("granules", "hammers", "impacts", "energy", "vtk"),
-        description="what to write: CSV tables (granules, hammers, impacts, energy, releases: "
+        description="what to write: CSV tables (granules, hammers, impacts: impacts.csv and "
+        "contacts.csv, each granule-hammer contact from start to end, energy, releases: "
         "granules pulled from their cells, outflow: granules gone through the outlet) and 'vtk' "
         "(ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
     )

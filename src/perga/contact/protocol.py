@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from perga.machine.compiled import CompiledMachine
 from perga.machine.effects import GranuleKinematics
 from perga.machine.machine import MachineState
-from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.records import Contact, Impact, LedgerTerms, Release
 from perga.model.system import GranuleSpec
 
 FloatArray = NDArray[np.float64]
@@ -70,12 +70,14 @@ class ContactModel(Protocol):
     """Granules and their contacts (with each other, the hammers and the chamber wall).
 
     granule_dt: the granules' step, s (the machine step divided by the model's substeps);
-    impacts: the granule-hammer impacts completed so far, in order; threads: the most CPU threads
-    its step has used at once.
+    impacts: the granule-hammer impacts completed so far, in order; contact_episodes: the
+    granule-hammer contacts ended so far, in order; threads: the most CPU threads its step has
+    used at once.
     """
 
     granule_dt: float
     impacts: list[Impact]
+    contact_episodes: list[Contact]
     threads: int
 
     def kinematics(self) -> GranuleKinematics:

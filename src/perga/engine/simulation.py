@@ -308,9 +308,11 @@ class Simulation:
         )
 
     def events(self) -> Events:
-        """The impacts, releases and departures so far (views of the growing lists)."""
+        """The impacts, releases, departures and ended contacts so far (views of the growing
+        lists)."""
         return Events(
             self.impacts,
             self.contacts.releases,
             () if self.outlet is None else self.outlet.departures,
+            self.contacts.contact_episodes,
         )

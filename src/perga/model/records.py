@@ -91,6 +91,42 @@ class Impact:
 
 
 @dataclass(frozen=True)
+class Contact:
+    """One granule-hammer contact from its start to its end, SI units: what a slide along a
+    hammer face is compared with (:mod:`perga.stats.slide_law`).
+
+    granule, hammer: ids; start, end: s, the times of the first and last states; steps: the
+    machine steps the contact lasted; normal: the hammer's outward normal at the start;
+    position_start, velocity_start (m, m/s, fixed frame), spin_start (rad/s): the granule at
+    the start; the same at the end; hammer_turn: the angle the hammer turned through from
+    start to end, rad; hammer_angular_velocity_start/end: its absolute angular velocity,
+    rad/s; other_contacts: the most contacts the
+    granule had besides this one at once (rigid: in any of its steps; soft: at its start and
+    end; a hammer's other pieces belong to this contact); held: the granule was held in its
+    cell at the start. Each contact model says what its start and end states are
+    (:mod:`perga.contact.rigid.impacts`, :mod:`perga.contact.soft.impacts`).
+    """
+
+    granule: int
+    hammer: int
+    start: float
+    end: float
+    steps: int
+    normal: tuple[float, float]
+    position_start: tuple[float, float]
+    velocity_start: tuple[float, float]
+    spin_start: float
+    position_end: tuple[float, float]
+    velocity_end: tuple[float, float]
+    spin_end: float
+    hammer_turn: float
+    hammer_angular_velocity_start: float
+    hammer_angular_velocity_end: float
+    other_contacts: int
+    held: bool
+
+
+@dataclass(frozen=True)
 class Release:
     """A granule pulled out of its comb cell: at ``time`` (s, the end of the machine step),
     granule ``granule`` (its id), by a bond reaction of ``force`` (N) above its threshold."""
@@ -120,11 +156,12 @@ class Departure:
 @dataclass(frozen=True)
 class Events:
     """Everything a run has recorded so far, in order: granule-hammer impacts, granules released
-    from their cells, granules gone through the outlet."""
+    from their cells, granules gone through the outlet, granule-hammer contacts ended."""
 
     impacts: Sequence[Impact] = ()
     releases: Sequence[Release] = ()
     departures: Sequence[Departure] = ()
+    contacts: Sequence[Contact] = ()
 
 
 @dataclass(frozen=True)

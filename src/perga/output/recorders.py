@@ -20,7 +20,7 @@ import numpy as np
 
 from perga.contact.laws import contact_law
 from perga.model.frame import Frame
-from perga.model.records import Departure, Events, Impact, Release
+from perga.model.records import Contact, Departure, Events, Impact, Release
 from perga.model.system import System
 from perga.output.tables import ParquetTable, Table, open_table
 from perga.output.vtk import VtkRecorder
@@ -151,6 +151,10 @@ SPLIT = {
     "granule_velocity_before": ("vx_before", "vy_before"),
     "granule_velocity_after": ("vx_after", "vy_after"),
     "hammer_centre_before": ("hammer_x_before", "hammer_y_before"),
+    "position_start": ("x_start", "y_start"),
+    "velocity_start": ("vx_start", "vy_start"),
+    "position_end": ("x_end", "y_end"),
+    "velocity_end": ("vx_end", "vy_end"),
 }
 """Vector fields of the records and their columns."""
 
@@ -222,6 +226,13 @@ class ImpactRecorder(EventRecorder):
         return frozenset(omit)
 
 
+class ContactRecorder(EventRecorder):
+    """contacts.csv: every granule-hammer contact when it ends, one column per field of
+    :class:`~perga.model.records.Contact` (SI); written with impacts.csv."""
+
+    kind, record_type, file = "contacts", Contact, "contacts.csv"
+
+
 class ReleaseRecorder(EventRecorder):
     """releases.csv: every granule pulled out of its cell (:class:`~perga.model.records.
     Release`: time, granule, force; SI)."""
@@ -281,15 +292,21 @@ RECORDERS: dict[str, type] = {
 }
 """Recorder class by the name used in the case file's output.record."""
 
+COMPANIONS: dict[str, tuple[type, ...]] = {"impacts": (ContactRecorder,)}
+"""Recorders that come with a name of output.record: contacts.csv with impacts.csv."""
+
 
 def make_recorders(
     names: Sequence[str], directory: Path, spec: System, granule_table: str = "csv"
 ) -> list[Recorder]:
-    """The recorders ``names`` (keys of :data:`RECORDERS`) for a run into ``directory``; the
-    granule table in ``granule_table`` format ('csv' or 'parquet')."""
-    return [
-        GranuleRecorder(directory, spec, granule_table)
-        if name == "granules"
-        else RECORDERS[name](directory, spec)
-        for name in names
-    ]
+    """The recorders ``names`` (keys of :data:`RECORDERS`) and their :data:`COMPANIONS` for a
+    run into ``directory``; the granule table in ``granule_table`` format ('csv' or
+    'parquet')."""
+    recorders: list[Recorder] = []
+    for name in names:
+        if name == "granules":
+            recorders.append(GranuleRecorder(directory, spec, granule_table))
+        else:
+            recorders.append(RECORDERS[name](directory, spec))
+        recorders += [companion(directory, spec) for companion in COMPANIONS.get(name, ())]
+    return recorders

@@ -26,6 +26,7 @@ from perga.model.compile import compile_case, load_system
 from perga.model.system import System
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
+from perga.output.vtk import VtkRecorder
 from perga.run import checkpoints
 from perga.run.directory import case_digest, prepare_directory, shown, write_case_copy
 from perga.run.guards import RunStoppedError, check_granules, check_population
@@ -62,8 +63,9 @@ def writers(case: Case, directory: Path, system: System) -> list[Writer]:
     recorders = make_recorders(out.record, directory, system, out.granule_table)
     vtk_every = out.vtk_every if out.vtk_every is not None else out.every
     return [
-        Writer(recorder, PhaseLock(vtk_every if name == "vtk" else out.every), name == "vtk")
-        for name, recorder in zip(out.record, recorders, strict=True)
+        Writer(recorder, PhaseLock(vtk_every if vtk else out.every), vtk)
+        for recorder in recorders
+        for vtk in (isinstance(recorder, VtkRecorder),)
     ]
 
 

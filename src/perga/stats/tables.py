@@ -18,6 +18,9 @@ from perga.output.tables import read_columns, table_path
 FloatArray = NDArray[np.float64]
 Columns = dict[str, FloatArray]
 
+TABLES = ("granules", "hammers", "impacts", "contacts", "energy")
+"""The run tables :class:`Run` reads."""
+
 
 def read_table(path: Path) -> Columns:
     """A run table (CSV with a header row, or a Parquet dataset) as {column: float array};
@@ -36,6 +39,8 @@ class Run:
     hammers: Columns = field(repr=False)
     impacts: Columns = field(repr=False)
     energy: Columns = field(repr=False)
+    contacts: Columns = field(default_factory=dict, repr=False)
+    """contacts.csv: each granule-hammer contact from start to end (empty: not recorded)."""
     label: str = ""
     """The run's name in analyses and reports; empty: its directory's name."""
 
@@ -50,7 +55,7 @@ class Run:
         return self.case.rotor.angular_velocity
 
     def dataframe(self, table: str) -> Any:
-        """Table ``table`` (granules, hammers, impacts or energy) as a pandas DataFrame, one
+        """Table ``table`` (one of :data:`TABLES`) as a pandas DataFrame, one
         column per CSV column (SI units); needs pandas (``pip install 'perga[notebook]'``)."""
         try:
             import pandas as pd
@@ -59,8 +64,8 @@ class Run:
                 "Run.dataframe needs pandas (pip install 'perga[notebook]'); without it the "
                 f"tables are numpy columns: run.{table}['time'], ..."
             ) from None
-        if table not in ("granules", "hammers", "impacts", "energy"):
-            raise ValueError(f"no table {table!r}: granules, hammers, impacts or energy")
+        if table not in TABLES:
+            raise ValueError(f"no table {table!r}: {', '.join(TABLES[:-1])} or {TABLES[-1]}")
         return pd.DataFrame(getattr(self, table))
 
     def track(self, granule: int = 0) -> Columns:
@@ -100,6 +105,7 @@ def load_run(directory: Path | str, label: str = "") -> Run:
         hammers=_optional(directory, "hammers"),
         impacts=_optional(directory, "impacts"),
         energy=_optional(directory, "energy"),
+        contacts=_optional(directory, "contacts"),
         label=label,
     )
 

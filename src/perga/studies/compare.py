@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import asdict, dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -30,88 +29,14 @@ from perga.analytic.impact import impact_efficiencies
 from perga.analytic.paper import PaperRadialMotion, paper_cumulative_loss, paper_roots
 from perga.analytic.sliding import BladeSlide, LinearSlide
 from perga.stats.energy import all_impacts, hinged_prediction, successive_energies
-from perga.stats.impact_law import ISOLATED, ImpactCheck, check_impacts, summarise
 from perga.stats.sweeps import blade_exit, blade_tip, efficiency_point
 from perga.stats.tables import Run
 from perga.stats.trajectory import amplitude_left, blade_frame, fit_exponential, free_flight
+from perga.studies.compare_any import analyse_other, impact_law_rows, slide_rows
+from perga.studies.compare_rows import AGREEMENT, Analysis, Row, missing_impacts
 from perga.studies.paper_check import Params, successive_model, vmax_decaying
 
-AGREEMENT = 0.01
-"""Relative tolerance where simulation and analytical model describe the same physics: the
-issue's 1 %. The rigid engine reproduces the closed forms to 1e-4-5e-4 at the bundled steps
-(docs/validation.md), so 1 % catches any modelling error with a margin of 20 or more."""
-
 Kind = Literal["sliding", "two-body", "hinged", "other"]
-
-
-@dataclass(frozen=True)
-class Row:
-    """One statistic: simulated against analytical, with the error and the reason."""
-
-    run: str
-    figure: str
-    quantity: str
-    simulated: float
-    analytic: float
-    model: str
-    tolerance: float | None
-    """Relative tolerance where the physics is the same; None where it differs."""
-    reason: str
-    unit: str = "-"
-
-    @property
-    def error(self) -> float:
-        """(simulated − analytic)/|analytic|, -."""
-        if self.analytic == 0:
-            return math.inf if self.simulated else 0.0
-        return (self.simulated - self.analytic) / abs(self.analytic)
-
-    @property
-    def agrees(self) -> bool | None:
-        """|error| ≤ tolerance, or None for a row that is not expected to agree."""
-        return None if self.tolerance is None else abs(self.error) <= self.tolerance
-
-    def as_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return asdict(self) | {"error": self.error, "agrees": self.agrees}
-
-
-@dataclass(frozen=True)
-class Unavailable:
-    """A statistic that could not be computed for a run, and why."""
-
-    run: str
-    statistic: str
-    reason: str
-
-
-@dataclass
-class Analysis:
-    """The rows of one run (or sweep), the statistics it could not give (:class:`Unavailable`)
-    and the series its figures draw (SI units)."""
-
-    name: str
-    kind: str
-    rows: list[Row] = field(default_factory=list)
-    series: dict[str, object] = field(default_factory=dict)
-    unavailable: list[Unavailable] = field(default_factory=list)
-
-    def cannot(self, run: Run, statistic: str, reason: str) -> None:
-        """Record that ``statistic`` of ``run`` could not be computed, and why."""
-        self.unavailable.append(Unavailable(run.name, statistic, reason))
-
-
-def missing_impacts(run: Run, needed: int = 1) -> str | None:
-    """Why ``run`` has fewer than ``needed`` granule-hammer impacts, or None if it has them."""
-    if not run.impacts:
-        return "the run did not record impacts (output.record lacks 'impacts')"
-    n = run.impacts["time"].size
-    if n >= needed:
-        return None
-    simulated = run.summary.get("simulated_time") or 0.0
-    return (
-        f"{n} granule-hammer impacts completed in the run's {simulated:.3g} s; this needs {needed}"
-    )
 
 
 # --- recognising a run -----------------------------------------------------------------------
@@ -486,7 +411,8 @@ def analyse_hinged(run: Run) -> Analysis:
         a.cannot(run, "restitution, losses and energy transfer of the impacts", reason)
         a.cannot(run, "the granule's flight after its first impact", reason)
         return a
-    _impact_law_rows(run, a)
+    impact_law_rows(run, a)
+    slide_rows(run, a)
     if case.hammers.shape.kind == "plate":
         _hinged_rows(run, a, stats)
     _flight_rows(run, a, "realistic ω, f; x0 = r − R at the impact")
@@ -577,136 +503,6 @@ def _successive_rows(run: Run, a: Analysis) -> None:
                     "radius does not decay between impacts",
                 )
             )
-
-
-def _machine_dt(run: Run) -> float:
-    """The run's machine step, s (summary.json), nan if it is not there."""
-    steps = run.summary.get("time_step")
-    return float(steps.get("machine", math.nan)) if isinstance(steps, dict) else math.nan
-
-
-def _impact_law_rows(run: Run, a: Analysis) -> list[ImpactCheck]:
-    """Every recorded impact against the impact law with friction
-    (:mod:`perga.stats.impact_law`): the share of isolated impacts whose velocity after agrees
-    within 1 % and the energy they lost against the law's (rigid contacts: the same physics);
-    soft contacts against the same instantaneous law, a regime that differs by the contact's
-    duration."""
-    try:
-        checks = check_impacts(run)
-    except ValueError as reason:
-        statistic = "every impact against the impact law with friction"
-        a.cannot(run, statistic, str(reason).split(": ", 1)[-1])
-        return []
-    a.series["impact_checks"] = checks
-    summary = summarise(checks)
-    isolated, others = summary.isolated, summary.others
-    model = "coupled_impact (Coulomb friction, sticking cap, the hammer's effective mass)"
-    rigid = run.case.contact_model.kind == "rigid"
-    sample = isolated or summary.compared
-    if not sample:
-        a.cannot(
-            run, "every impact against the impact law with friction", f"none compared: {others}"
-        )
-        return checks
-    errors = np.array([c.velocity_error for c in sample])
-    worst = sample[int(np.argmax(errors))]
-    spread = (
-        f"{len(isolated)} of {len(checks)} impacts isolated, "
-        f"{summary.energy_share_isolated:.1%} of the energy lost in impacts; velocity error "
-        f"median {np.median(errors):.2e}, 90th percentile {np.quantile(errors, 0.9):.2e}, 99th "
-        f"{np.quantile(errors, 0.99):.2e}, worst {worst.velocity_error:.2e} (granule "
-        f"{worst.granule} at {worst.time:.5g} s); not isolated: {others}"
-    )
-    which = "isolated" if isolated else "(none isolated: all)"
-    if rigid and isolated:
-        dt = _machine_dt(run)
-        step = run.omega**2 * run.case.hammers.hinge_radius * dt
-        a.rows.append(
-            Row(
-                run.name, "impacts",
-                f"share of {len(isolated)} isolated impacts whose velocity after is within 1 %",
-                float(np.mean(errors <= AGREEMENT)), 1.0, model, AGREEMENT,
-                f"{spread}. The rigid step adds what the hammer's point gains in one step "
-                f"(ω²·R·dt = {step:.2g} m/s at the hinge): first order in dt",
-            )
-        )  # fmt: skip
-    else:
-        speeds = np.array([c.speed_after for c in sample])
-        a.rows.append(
-            Row(
-                run.name, "impacts", f"mean speed after the {which} impacts",
-                float(speeds[:, 0].mean()), float(speeds[:, 1].mean()), model, None,
-                f"{spread}; " + (_soft_split(sample) if not rigid else "no impact is isolated"),
-                "m/s",
-            )
-        )  # fmt: skip
-    a.rows.append(
-        Row(
-            run.name, "impacts", f"energy lost in the {which} impacts",
-            sum(c.dissipated[0] for c in sample), sum(c.dissipated[1] for c in sample),
-            model, AGREEMENT if rigid and isolated else None,
-            "same physics: the law's loss per impact, summed" if rigid and isolated
-            else "soft contacts last t_c; not isolated impacts share their impulse",
-            "J",
-        )
-    )  # fmt: skip
-    _energy_row(run, a, checks, isolated)
-    return checks
-
-
-def _soft_split(checks: list[ImpactCheck]) -> str:
-    """The soft contacts' difference from the law, split where the law slides and sticks."""
-    parts = []
-    for sticks, what in ((False, "sliding at the cap"), (True, "sticking")):
-        errors = [c.velocity_error for c in checks if c.sticks == sticks]
-        if errors:
-            parts.append(f"{what}, {len(errors)}: median {np.median(errors):.2e}")
-    return (
-        "; ".join(parts) + ". Soft contacts last t_c (the sliding impacts' difference falls with "
-        "it); a sticking one's tangential spring gives the slip back, which the law stops"
-    )
-
-
-def _energy_row(
-    run: Run, a: Analysis, checks: list[ImpactCheck], isolated: list[ImpactCheck]
-) -> None:
-    """The contacts' dissipation booked by the ledger against the law's losses in the isolated
-    impacts, the difference named term by term (summary.json's energy, impacts.csv)."""
-    energy = run.summary.get("energy")
-    if not isinstance(energy, dict) or "contact_dissipation" not in energy:
-        a.cannot(run, "the ledger's dissipation against the law's", "summary.json has no ledger")
-        return
-    booked = float(energy["contact_dissipation"])
-    law = sum(c.dissipated[1] for c in isolated)
-    recorded_isolated = sum(c.dissipated[0] for c in isolated)
-    recorded_other = sum(c.dissipated[0] for c in checks if c.regime != ISOLATED)
-    rest = booked - recorded_isolated - recorded_other
-    a.rows.append(
-        Row(
-            run.name, "impacts", "energy lost in contacts: the ledger's, against the law's sum "
-            "over the isolated impacts", booked, law,
-            "coupled_impact per isolated impact, summed", None,
-            f"the ledger's contact term is the isolated impacts' {recorded_isolated:.4g} J (the "
-            f"law's {law:.4g} J) + the other impacts' {recorded_other:.4g} J + {rest:.4g} J in "
-            "contacts the impact log does not hold (granule pairs, the wall, a contact's steps "
-            "after its first, held granules' cells); apart from it the ledger books friction "
-            f"{float(energy.get('friction', 0.0)):.4g} J (floor, hinges) and drag "
-            f"{float(energy.get('drag', 0.0)):.4g} J, and closes to "
-            f"{float(energy.get('closure', math.nan)):+.2e}",
-            "J",
-        )
-    )  # fmt: skip
-
-
-def analyse_other(run: Run) -> Analysis:
-    """Any run: every impact against the impact law with friction."""
-    a = Analysis(run.name, "other")
-    a.series["impacts"] = all_impacts(run)
-    if reason := missing_impacts(run):
-        a.cannot(run, "every impact against the impact law with friction", reason)
-        return a
-    _impact_law_rows(run, a)
-    return a
 
 
 def analyse(runs: Iterable[Run], paper: Params | None = None) -> list[Analysis]:

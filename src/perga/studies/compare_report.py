@@ -18,8 +18,15 @@ import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
 from perga.output.figures import new_figure, save
-from perga.stats.impact_law import ISOLATED, summarise
-from perga.studies.compare import Analysis, Row, Unavailable
+from perga.stats.impact_law import ISOLATED
+from perga.stats.slide_law import ON_FACE
+from perga.studies.compare_episodes import (
+    impact_section,
+    impact_summary,
+    slide_section,
+    slide_summary,
+)
+from perga.studies.compare_rows import Analysis, Row, Unavailable
 from perga.studies.paper_check import Params
 
 Figure = Callable[[list[Analysis], Params | None, Path], bool]
@@ -218,6 +225,33 @@ def histogram(analyses: list[Analysis], _paper: Params | None, path: Path) -> bo
     return save(fig, path)
 
 
+@figure("slides", "Slides along hammer faces against the disc on a face")
+def slide_errors(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
+    checks = [c for a in analyses for c in a.series.get("slide_checks", [])]
+    drawn = [c for c in checks if np.isfinite(c.velocity_error)]
+    if not drawn:
+        return False
+    fig, ax = new_figure((6.5, 4))
+    for on, label, marker in ((True, ON_FACE, "o"), (False, "not in the model's regime", "x")):
+        chosen = [c for c in drawn if (c.regime == ON_FACE) == on]
+        if chosen:
+            ax.scatter(
+                [c.duration * 1e3 for c in chosen],
+                [max(c.velocity_error, 1e-6) for c in chosen],
+                marker=marker,
+                label=label,
+            )
+    ax.axhline(0.01, color="k", lw=0.8, ls="--", label="1 %")
+    ax.set(
+        yscale="log",
+        xlabel="length of the slide, ms",
+        ylabel="|v − v_model| / |v_model| at the end",
+        title=f"{len(drawn)} slides",
+    )
+    ax.legend(fontsize=7)
+    return save(fig, path)  # fmt: skip
+
+
 @figure("impacts", "Impacts against the impact law with friction")
 def impact_errors(analyses: list[Analysis], _paper: Params | None, path: Path) -> bool:
     checks = [c for a in analyses for c in a.series.get("impact_checks", [])]
@@ -236,70 +270,6 @@ def impact_errors(analyses: list[Analysis], _paper: Params | None, path: Path) -
            title=f"velocity after, {finite.sum()} impacts")  # fmt: skip
     ax.legend(fontsize=7)
     return save(fig, path)
-
-
-def impact_summary(analysis: Analysis) -> dict[str, object] | None:
-    """The impacts of one analysed run against the law (:func:`~perga.stats.impact_law.
-    summarise`): counts, shares, quantiles of the isolated impacts' velocity error and of every
-    statistic's, the five worst with their regime, and a verdict in words; None without
-    checked impacts."""
-    checks = analysis.series.get("impact_checks")
-    if not checks:
-        return None
-    summary = summarise(checks)
-    errors = np.array([c.velocity_error for c in summary.isolated])
-    quantiles = (
-        {q: float(np.quantile(errors, q)) for q in (0.5, 0.9, 0.99, 1.0)} if errors.size else {}
-    )
-    within = float(np.mean(errors <= 0.01)) if errors.size else None
-    verdict = (
-        f"{len(summary.isolated) / len(checks):.0%} of {len(checks)} impacts, carrying "
-        f"{summary.energy_share_isolated:.0%} of the energy lost in impacts, are isolated"
-        + (
-            f"; on those the velocity after agrees with the law within 1 % in {within:.1%} "
-            f"(median error {quantiles[0.5]:.2e}, worst {quantiles[1.0]:.2e})."
-            if within is not None
-            else "."
-        )
-    )
-    return {
-        "run": analysis.name,
-        "statistics": summary.statistics(),
-        "impacts": len(checks),
-        "isolated": len(summary.isolated),
-        "energy_share_isolated": summary.energy_share_isolated,
-        "within_1_percent": within,
-        "error_quantiles": {str(q): v for q, v in quantiles.items()},
-        "worst": [
-            {"granule": c.granule, "time": c.time, "regime": c.regime, "error": c.velocity_error}
-            for c in summary.worst(5)
-        ],
-        "verdict": verdict,
-    }
-
-
-def _impact_section(summaries: list[dict[str, object]]) -> list[str]:
-    lines = ["## Impacts, one by one", ""]
-    for s in summaries:
-        lines += [f"**{s['run']}**: {s['verdict']}", ""]
-        stats = s["statistics"]
-        if stats:
-            lines += ["| isolated impacts: error of | median | 99th percentile |", "|---|---|---|"]
-            lines += [
-                f"| {name} | {v['median']:.2e} | {v['p99']:.2e} |"
-                for name, v in stats.items()  # type: ignore[union-attr]
-            ]
-            lines.append("")
-        lines += [
-            "| worst | granule | time, s | regime | velocity error |",
-            "|---|---|---|---|---|",
-        ]
-        lines += [
-            f"| {k + 1} | {w['granule']} | {w['time']:.6g} | {w['regime']} | {w['error']:.3e} |"
-            for k, w in enumerate(s["worst"])  # type: ignore[arg-type]
-        ]
-        lines.append("")
-    return lines
 
 
 # --- the report ---------------------------------------------------------------------------------
@@ -371,7 +341,10 @@ def write_report(
             lines.append(_table(section))
     impacts = [s for a in analyses if (s := impact_summary(a)) is not None]
     if impacts:
-        lines += _impact_section(impacts)
+        lines += impact_section(impacts)
+    slides = [s for a in analyses if (s := slide_summary(a)) is not None]
+    if slides:
+        lines += slide_section(slides)
     shown = set(written)
     for heading, group in (
         ("Agreement where the physics is the same", agree),
@@ -391,6 +364,7 @@ def write_report(
         "rows": [r.as_dict() for r in rows],
         "unavailable": [asdict(u) for u in unavailable],
         "impacts": impacts,
+        "slides": slides,
         "largest_agreement_error": worst if agree else None,
     }
     (out / "report.json").write_text(json.dumps(data, indent=2, default=float) + "\n")

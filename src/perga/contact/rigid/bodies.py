@@ -63,7 +63,16 @@ class RigidBodies:
     friction: dict[str, float] = field(default_factory=dict)
     granule_group: int = 0
     pairs: list[tuple[int, int]] = field(default_factory=list)
-    handlers: dict[tuple[int, int, Phase], list[Callback]] = field(default_factory=dict)
+    handlers: dict[tuple[int, int, Phase], _Listeners] = field(default_factory=dict)
+    errors: list[BaseException] = field(default_factory=list)
+    """Errors raised in listeners during a step (Chipmunk's callbacks cannot raise): the contact
+    model raises the first after the step (:meth:`raise_errors`)."""
+
+    def raise_errors(self) -> None:
+        """Raise the first error a listener raised since the last call, if any."""
+        if self.errors:
+            error, self.errors[:] = self.errors[0], []
+            raise error
 
     @property
     def space(self) -> pymunk.Space:
@@ -107,7 +116,7 @@ class RigidBodies:
         """Run ``callback`` in ``phase`` of the handler of collision types (type_a, type_b)."""
         key = (type_a, type_b, phase)
         if key not in self.handlers:
-            self.handlers[key] = []
+            self.handlers[key] = _Listeners(self.errors)
             self.machine.space.on_collision(
                 type_a, type_b, data=self.handlers[key], **{phase: _dispatch}
             )
@@ -118,9 +127,20 @@ class RigidBodies:
         return [(kind_of[a], kind_of[b], a, b) for a, b in self.pairs]
 
 
-def _dispatch(arbiter: pymunk.Arbiter, space: pymunk.Space, callbacks: list[Callback]) -> None:
-    for callback in callbacks:
-        callback(arbiter, space, None)
+class _Listeners(list):
+    """The callbacks of one handler phase, and where their errors go."""
+
+    def __init__(self, errors: list[BaseException]) -> None:
+        super().__init__()
+        self.errors = errors
+
+
+def _dispatch(arbiter: pymunk.Arbiter, space: pymunk.Space, callbacks: _Listeners) -> None:
+    try:
+        for callback in callbacks:
+            callback(arbiter, space, None)
+    except Exception as error:  # Chipmunk's C caller would print it and go on
+        callbacks.errors.append(error)
 
 
 def _ends(pair: frozenset[str]) -> tuple[str, str]:

@@ -8,19 +8,25 @@ kinetic energy and velocity and the hammer's state, read after the step's positi
 before its impulses; its first ``post_solve`` completes the row with the velocities after the
 impulses, the impulse and the energy dissipated in the contact, −J·v̄_rel with v̄_rel the mean
 of the relative contact velocity before and after (exact for one impulse).
+
+A contact goes on while any piece of the hammer touches the granule; when the last separates it
+is written as a :class:`~perga.model.records.Contact`: its first state is the granule's after
+its first step's impulses (the impact's "after"), its last the granule's after its last step's,
+its other contacts the most the granule had in any of its steps. A contact still open when the
+run ends is not written.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Container
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 import pymunk
 
 from perga.contact.rigid.bodies import RigidBodies
 from perga.machine import units as u
-from perga.model.records import HammerState, Impact
+from perga.model.records import Contact, HammerState, Impact
 
 
 def _contact(arbiter: pymunk.Arbiter) -> tuple[pymunk.Vec2d, pymunk.Vec2d, pymunk.Vec2d]:
@@ -46,14 +52,14 @@ def _spin(body: pymunk.Body) -> float:
     return u.to_si(body.angular_velocity, u.ANGULAR_VELOCITY)
 
 
-def _other_contacts(arbiter: pymunk.Arbiter) -> int:
-    """Touching contacts in this step on the granule, and on the hammer unless its body moves
-    as prescribed (kinematic: no contact changes its motion), but those of this granule with
-    this hammer body (its other pieces belong to this impact)."""
+def _other_contacts(arbiter: pymunk.Arbiter, *, hammer_side: bool = True) -> int:
+    """Touching contacts in this step on the granule, and (``hammer_side``) on the hammer unless
+    its body moves as prescribed (kinematic: no contact changes its motion), but those of this
+    granule with this hammer body (its other pieces belong to this impact)."""
     granule, hammer = (shape.body for shape in arbiter.shapes)
     touching: list[pymunk.Arbiter] = []
     granule.each_arbiter(touching.append)
-    if hammer.body_type == pymunk.Body.DYNAMIC:
+    if hammer_side and hammer.body_type == pymunk.Body.DYNAMIC:
         hammer.each_arbiter(touching.append)
     pair = {granule, hammer}
     return sum(
@@ -62,6 +68,67 @@ def _other_contacts(arbiter: pymunk.Arbiter) -> int:
 
 
 _Pending = tuple[pymunk.Vec2d, float, pymunk.Vec2d, float, HammerState]
+
+
+@dataclass
+class _Granule:
+    """A granule body's position (m), velocity (m/s) and spin (rad/s), and its hammer body's
+    angle (rad) and angular velocity (rad/s), at one time (s)."""
+
+    time: float
+    position: tuple[float, float]
+    velocity: tuple[float, float]
+    spin: float
+    hammer_angle: float
+    hammer_omega: float
+
+    @classmethod
+    def read(cls, time: float, arbiter: pymunk.Arbiter) -> _Granule:
+        granule, hammer = (shape.body for shape in arbiter.shapes)
+        return cls(
+            time,
+            u.vec_to_si(tuple(granule.position), u.LENGTH),
+            u.vec_to_si(tuple(granule.velocity), u.VELOCITY),
+            _spin(granule),
+            hammer.angle,
+            u.to_si(hammer.angular_velocity, u.ANGULAR_VELOCITY),
+        )
+
+
+@dataclass
+class _Open:
+    """A contact going on: its first and last states, its steps, the most other contacts the
+    granule had in one of them, its touching shape pairs."""
+
+    first: _Granule
+    normal: tuple[float, float]
+    held: bool
+    last: _Granule
+    steps: int = 1
+    others: int = 0
+    shapes: set[tuple[pymunk.Shape, pymunk.Shape]] = field(default_factory=set)
+
+    def contact(self, granule: int, hammer: int) -> Contact:
+        a, b = self.first, self.last
+        return Contact(
+            granule=granule,
+            hammer=hammer,
+            start=a.time,
+            end=b.time,
+            steps=self.steps,
+            normal=self.normal,
+            position_start=a.position,
+            velocity_start=a.velocity,
+            spin_start=a.spin,
+            position_end=b.position,
+            velocity_end=b.velocity,
+            spin_end=b.spin,
+            hammer_turn=b.hammer_angle - a.hammer_angle,
+            hammer_angular_velocity_start=a.hammer_omega,
+            hammer_angular_velocity_end=b.hammer_omega,
+            other_contacts=self.others,
+            held=self.held,
+        )
 
 
 class RigidImpactLog:
@@ -85,6 +152,8 @@ class RigidImpactLog:
         rewritten: bool = False,
     ) -> None:
         self.impacts: list[Impact] = []
+        self._contacts: list[Contact] = []
+        self._ended: list[Contact] = []  # since the last read, in Chipmunk's order
         self._held = held
         self.time = 0.0
         self._machine = bodies.machine
@@ -94,6 +163,7 @@ class RigidImpactLog:
         self._pending: dict[tuple[pymunk.Shape, pymunk.Shape], _Pending | None] = {}
         self._rows: dict[tuple[int, int], int] = {}
         self._rows_time = -1.0
+        self._open: dict[tuple[int, int], _Open] = {}  # (granule, hammer) -> its contact
         start = "pre_solve" if rewritten else "begin"
         bodies.listen(start, self._start, ("granule", "hammer"))
         bodies.listen("post_solve", self._post_solve, ("granule", "hammer"))
@@ -114,6 +184,7 @@ class RigidImpactLog:
 
     def _post_solve(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         shapes = tuple(arbiter.shapes)
+        self._go_on(arbiter, shapes)
         pending = self._pending.get(shapes)  # type: ignore[call-overload]
         if pending is None:
             return
@@ -169,5 +240,40 @@ class RigidImpactLog:
             )
         )
 
+    def _go_on(self, arbiter: pymunk.Arbiter, shapes: tuple) -> None:
+        """Open the pair's contact at its first solved step or take this step's state."""
+        key = self._key(arbiter)
+        others = _other_contacts(arbiter, hammer_side=False)
+        contact = self._open.get(key)
+        if contact is None:
+            now = _Granule.read(self.time, arbiter)
+            contact = _Open(now, tuple(-arbiter.normal), key[0] in self._held, now)
+            self._open[key] = contact
+        elif contact.last.time != self.time:
+            contact.last = _Granule.read(self.time, arbiter)
+            contact.steps += 1
+        contact.others = max(contact.others, others)
+        contact.shapes.add(shapes)
+
     def _separate(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
-        self._pending.pop(tuple(arbiter.shapes), None)  # type: ignore[arg-type]
+        shapes = tuple(arbiter.shapes)
+        self._pending.pop(shapes, None)  # type: ignore[arg-type]
+        key = self._key(arbiter)
+        contact = self._open.get(key)
+        if contact is None:
+            return
+        contact.shapes.discard(shapes)
+        if not contact.shapes:
+            del self._open[key]
+            self._ended.append(contact.contact(*key))
+
+    @property
+    def contacts(self) -> list[Contact]:
+        """The contacts ended so far, those ended since the last read in the order of their end,
+        granule and hammer (Chipmunk separates pairs in the order of its hash table, which a
+        restored space does not keep)."""
+        if self._ended:
+            self._ended.sort(key=lambda c: (c.end, c.granule, c.hammer))
+            self._contacts += self._ended
+            self._ended = []
+        return self._contacts

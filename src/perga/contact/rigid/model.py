@@ -40,7 +40,7 @@ from perga.machine import units as u
 from perga.machine.batch import BodyReader, BodyWriter
 from perga.machine.effects import FloorKick
 from perga.machine.machine import Machine, MachineState
-from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.records import Contact, Impact, LedgerTerms, Release
 from perga.model.system import GranuleSpec
 
 if TYPE_CHECKING:
@@ -138,6 +138,11 @@ class RigidContacts:
         """Impacts recorded so far (empty if recording is off)."""
         return [] if self.log is None else self.log.impacts
 
+    @property
+    def contact_episodes(self) -> list[Contact]:
+        """Granule-hammer contacts ended so far (empty if recording is off)."""
+        return [] if self.log is None else self.log.contacts
+
     def running(self) -> AbstractContextManager[None]:
         """Nothing to hold over a run: Chipmunk steps on one thread."""
         return nullcontext()
@@ -164,6 +169,7 @@ class RigidContacts:
         """The step's dissipation from the arbiters (read before anything moves a body); release
         the held granules whose bond is overloaded; returns the arbiters' angular impulse about
         the axis on the rotor-driven bodies, internal units."""
+        self.bodies.raise_errors()
         moment = 0.0 if self.arbiters is None else self.arbiters.after_step()
         if self._bonds:
             self._hold_or_release(time)

@@ -9,6 +9,8 @@ kernel's per-contact totals: normal and tangential impulse, energy dissipated, t
 force and, for a Hertz contact, the peak pressure it gives, ``hertz_peak_pressure``). Normal and
 tangent turn with the hammer between start and end (they are fixed in the hammer's frame).
 An impact is written when it ends; its ``time`` is the end of the Pymunk step in which it began.
+With it the log writes the contact as a :class:`~perga.model.records.Contact`: its first state
+the granule's before that step, its last the granule's after the step in which it ended.
 The velocities and energies of all the contacts a look opens or closes are computed in one
 compiled call (``_contact_motion``), the hammers' states once per look.
 """
@@ -33,7 +35,7 @@ from perga.contact.soft.polygon_set import (
 )
 from perga.geometry.disc_polygon import FASTMATH, closest_feature
 from perga.machine import units as u
-from perga.model.records import HammerState, Impact
+from perga.model.records import Contact, HammerState, Impact
 
 if TYPE_CHECKING:
     from perga.machine.machine import MachineState
@@ -48,6 +50,7 @@ class _Start(NamedTuple):
     normal_velocity: float
     tangential_velocity: float
     point: tuple[float, float]
+    position: tuple[float, float]
     granule_energy: float
     granule_velocity: tuple[float, float]
     granule_spin: float
@@ -73,13 +76,19 @@ def _first_edge(vertices: np.ndarray, start: np.ndarray, k: int) -> tuple[float,
     return (float(b[0] - a[0]), float(b[1] - a[1]))
 
 
+def _turn(before: tuple[float, float], after: tuple[float, float]) -> float:
+    """The angle (rad, in (−π, π]) through which a body whose edge ``before`` became ``after``
+    turned."""
+    return math.atan2(
+        before[0] * after[1] - before[1] * after[0], before[0] * after[0] + before[1] * after[1]
+    )
+
+
 def _turned(
     n: tuple[float, float], before: tuple[float, float], after: tuple[float, float]
 ) -> tuple[float, float]:
     """``n`` turned as a body whose edge ``before`` became ``after`` turned."""
-    angle = math.atan2(
-        before[0] * after[1] - before[1] * after[0], before[0] * after[0] + before[1] * after[1]
-    )
+    angle = _turn(before, after)
     c, s = math.cos(angle), math.sin(angle)
     return (c * n[0] - s * n[1], s * n[0] + c * n[1])
 
@@ -92,7 +101,8 @@ class SoftImpactLog:
     ``hammer_state(h, machine)`` gives hammer h's :class:`~perga.model.records.HammerState` now
     (``machine``: the machine's state now), ``ids()`` the id of each granule row;
     ``movable[h]``: whether hammer h's body moves under contacts (not carried by a rotor of
-    prescribed speed). An impact's other contacts are counted at its start and its end."""
+    prescribed speed); ``dt``: the machine step, s. An impact's other contacts are counted at
+    its start and its end."""
 
     def __init__(
         self,
@@ -101,8 +111,11 @@ class SoftImpactLog:
         hammer_state: Callable[[int, MachineState], HammerState],
         ids: Callable[[], np.ndarray],
         movable: np.ndarray,
+        dt: float,
     ) -> None:
         self.impacts: list[Impact] = []
+        self.contacts: list[Contact] = []
+        self._dt = dt
         self._g = granules
         self._ids = ids
         self._hammer_of = hammer_of
@@ -162,7 +175,7 @@ class SoftImpactLog:
         closed = [(i, k) for i, k, opened in changes if not opened]
         opened = [(i, k) for i, k, opened in changes if opened]
         if closed:
-            self._close(closed, ids, self._hammer_motion(machine, hammer_rows))
+            self._close(closed, ids, self._hammer_motion(machine, hammer_rows), time)
         if opened:
             self._start(opened, ids, time, machine)
 
@@ -200,6 +213,7 @@ class SoftImpactLog:
                 normal_velocity=vn,
                 tangential_velocity=vt,
                 point=(px, py),
+                position=(float(self._x[i, 0]), float(self._x[i, 1])),
                 granule_energy=energy,
                 granule_velocity=(float(self._v[i, 0]), float(self._v[i, 1])),
                 granule_spin=float(self._w[i]),
@@ -239,12 +253,13 @@ class SoftImpactLog:
         closed: list[tuple[int, int]],
         ids: np.ndarray,
         hammers_now: tuple[np.ndarray, np.ndarray, np.ndarray],
+        time: float,
     ) -> None:
         """Complete the impact of each (granule row, polygon) of ``closed``: the granule's
         state now relative to its hammer's motion now (``hammers_now``, ``_hammer_motion``:
         as the next kernel call will see it, as the start of an impact takes it from the call
         it begins in; the polygons' own velocities are those the last call started with), the
-        contact's totals from the kernel's history."""
+        contact's totals from the kernel's history; and its contact, ended at ``time`` (s)."""
         g = self._g
         done = []
         for i, k in closed:
@@ -255,9 +270,10 @@ class SoftImpactLog:
             return
         hammers = [int(self._hammer_of[k]) for _, k, _ in done]
         vertices, first = g.polygons.vertices, g.polygons.start
+        edges = [_first_edge(vertices, first, k) for _, k, _ in done]
         normals = [
-            _turned(start.normal, start.edge, _first_edge(vertices, first, k))
-            for _, k, start in done
+            _turned(start.normal, start.edge, edge)
+            for (_, _, start), edge in zip(done, edges, strict=True)
         ]
         rows = np.array([(i, k) for i, k, _ in done], dtype=np.int64)
         motion = _contact_motion(
@@ -265,8 +281,8 @@ class SoftImpactLog:
         ).tolist()
         table = g.polygon_table
         others = self._others([(i, k) for i, k, _ in done])
-        for (i, k, start), hammer, (vn, vt, _, _, energy), other in zip(
-            done, hammers, motion, others, strict=True
+        for (i, k, start), hammer, (vn, vt, _, _, energy), other, edge in zip(
+            done, hammers, motion, others, edges, strict=True
         ):
             row = g.polygon_hist[i, k]
             peak = float(row[HIST_PEAK_FORCE])
@@ -302,6 +318,28 @@ class SoftImpactLog:
                     granule_velocity_after=(float(g.v[i, 0]), float(g.v[i, 1])),
                     held=start.held,
                     other_contacts=max(start.others, other),
+                )
+            )
+            begun = start.time - self._dt
+            self.contacts.append(
+                Contact(
+                    granule=int(ids[i]),
+                    hammer=hammer,
+                    start=begun,
+                    end=time,
+                    steps=round((time - begun) / self._dt),
+                    normal=start.normal,
+                    position_start=start.position,
+                    velocity_start=start.granule_velocity,
+                    spin_start=start.granule_spin,
+                    position_end=(float(g.x[i, 0]), float(g.x[i, 1])),
+                    velocity_end=(float(g.v[i, 0]), float(g.v[i, 1])),
+                    spin_end=float(g.w[i]),
+                    hammer_turn=_turn(start.edge, edge),
+                    hammer_angular_velocity_start=start.hammer.angular_velocity,
+                    hammer_angular_velocity_end=float(hammers_now[2][k]),
+                    other_contacts=max(start.others, other),
+                    held=start.held,
                 )
             )
 

@@ -45,7 +45,7 @@ from perga.cores import CoreMonitor
 from perga.machine import units as u
 from perga.machine.effects import FloorKick
 from perga.machine.machine import Machine, MachineState
-from perga.model.records import Impact, LedgerTerms, Release
+from perga.model.records import Contact, Impact, LedgerTerms, Release
 from perga.model.system import GranuleSpec
 
 if TYPE_CHECKING:
@@ -122,6 +122,7 @@ class SoftContacts:
                 machine.hammer_state,
                 self.present_ids,
                 np.array([b.body_type == pymunk.Body.DYNAMIC for b in machine.hammer_bodies]),
+                self._machine_dt,
             )
             if record_impacts
             else None
@@ -151,6 +152,11 @@ class SoftContacts:
     def impacts(self) -> list[Impact]:
         """Impacts completed so far (empty if recording is off)."""
         return [] if self.log is None else self.log.impacts
+
+    @property
+    def contact_episodes(self) -> list[Contact]:
+        """Granule-hammer contacts ended so far (empty if recording is off)."""
+        return [] if self.log is None else self.log.contacts
 
     def running(self) -> AbstractContextManager[None]:
         """numba's thread count held at the run's first (``granules.threads``) over a run

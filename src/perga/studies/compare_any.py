@@ -1,0 +1,211 @@
+"""``perga compare`` on any run: every recorded impact against the impact law with friction
+(:mod:`perga.stats.impact_law`), every slide along a hammer face against the disc on a face
+turning with the rotor (:mod:`perga.stats.slide_law`), and the ledger's contact dissipation
+against the law's sum."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from perga.stats.energy import all_impacts
+from perga.stats.impact_law import ISOLATED, ImpactCheck, check_impacts, summarise
+from perga.stats.slide_law import check_slides, contact_time, summarise_slides
+from perga.stats.tables import Run
+from perga.studies.compare_rows import AGREEMENT, Analysis, Row, missing_impacts
+
+
+def _machine_dt(run: Run) -> float:
+    """The run's machine step, s (summary.json), nan if it is not there."""
+    steps = run.summary.get("time_step")
+    return float(steps.get("machine", math.nan)) if isinstance(steps, dict) else math.nan
+
+
+def impact_law_rows(run: Run, a: Analysis) -> list[ImpactCheck]:
+    """Every recorded impact against the impact law with friction
+    (:mod:`perga.stats.impact_law`): the share of isolated impacts whose velocity after agrees
+    within 1 % and the energy they lost against the law's (rigid contacts: the same physics);
+    soft contacts against the same instantaneous law, a regime that differs by the contact's
+    duration."""
+    try:
+        checks = check_impacts(run)
+    except ValueError as reason:
+        statistic = "every impact against the impact law with friction"
+        a.cannot(run, statistic, str(reason).split(": ", 1)[-1])
+        return []
+    a.series["impact_checks"] = checks
+    summary = summarise(checks)
+    isolated, others = summary.isolated, summary.others
+    model = "coupled_impact (Coulomb friction, sticking cap, the hammer's effective mass)"
+    rigid = run.case.contact_model.kind == "rigid"
+    sample = isolated or summary.compared
+    if not sample:
+        a.cannot(
+            run, "every impact against the impact law with friction", f"none compared: {others}"
+        )
+        return checks
+    errors = np.array([c.velocity_error for c in sample])
+    worst = sample[int(np.argmax(errors))]
+    spread = (
+        f"{len(isolated)} of {len(checks)} impacts isolated, "
+        f"{summary.energy_share_isolated:.1%} of the energy lost in impacts; velocity error "
+        f"median {np.median(errors):.2e}, 90th percentile {np.quantile(errors, 0.9):.2e}, 99th "
+        f"{np.quantile(errors, 0.99):.2e}, worst {worst.velocity_error:.2e} (granule "
+        f"{worst.granule} at {worst.time:.5g} s); not isolated: {others}"
+    )
+    which = "isolated" if isolated else "(none isolated: all)"
+    if rigid and isolated:
+        dt = _machine_dt(run)
+        step = run.omega**2 * run.case.hammers.hinge_radius * dt
+        a.rows.append(
+            Row(
+                run.name, "impacts",
+                f"share of {len(isolated)} isolated impacts whose velocity after is within 1 %",
+                float(np.mean(errors <= AGREEMENT)), 1.0, model, AGREEMENT,
+                f"{spread}. The rigid step adds what the hammer's point gains in one step "
+                f"(ω²·R·dt = {step:.2g} m/s at the hinge): first order in dt",
+            )
+        )  # fmt: skip
+    else:
+        speeds = np.array([c.speed_after for c in sample])
+        a.rows.append(
+            Row(
+                run.name, "impacts", f"mean speed after the {which} impacts",
+                float(speeds[:, 0].mean()), float(speeds[:, 1].mean()), model, None,
+                f"{spread}; " + (_soft_split(sample) if not rigid else "no impact is isolated"),
+                "m/s",
+            )
+        )  # fmt: skip
+    a.rows.append(
+        Row(
+            run.name, "impacts", f"energy lost in the {which} impacts",
+            sum(c.dissipated[0] for c in sample), sum(c.dissipated[1] for c in sample),
+            model, AGREEMENT if rigid and isolated else None,
+            "same physics: the law's loss per impact, summed" if rigid and isolated
+            else "soft contacts last t_c; not isolated impacts share their impulse",
+            "J",
+        )
+    )  # fmt: skip
+    _energy_row(run, a, checks, isolated)
+    return checks
+
+
+def _soft_split(checks: list[ImpactCheck]) -> str:
+    """The soft contacts' difference from the law, split where the law slides and sticks."""
+    parts = []
+    for sticks, what in ((False, "sliding at the cap"), (True, "sticking")):
+        errors = [c.velocity_error for c in checks if c.sticks == sticks]
+        if errors:
+            parts.append(f"{what}, {len(errors)}: median {np.median(errors):.2e}")
+    return (
+        "; ".join(parts) + ". Soft contacts last t_c (the sliding impacts' difference falls with "
+        "it); a sticking one's tangential spring gives the slip back, which the law stops"
+    )
+
+
+def _energy_row(
+    run: Run, a: Analysis, checks: list[ImpactCheck], isolated: list[ImpactCheck]
+) -> None:
+    """The contacts' dissipation booked by the ledger against the law's losses in the isolated
+    impacts, the difference named term by term (summary.json's energy, impacts.csv)."""
+    energy = run.summary.get("energy")
+    if not isinstance(energy, dict) or "contact_dissipation" not in energy:
+        a.cannot(run, "the ledger's dissipation against the law's", "summary.json has no ledger")
+        return
+    booked = float(energy["contact_dissipation"])
+    law = sum(c.dissipated[1] for c in isolated)
+    recorded_isolated = sum(c.dissipated[0] for c in isolated)
+    recorded_other = sum(c.dissipated[0] for c in checks if c.regime != ISOLATED)
+    rest = booked - recorded_isolated - recorded_other
+    a.rows.append(
+        Row(
+            run.name, "impacts", "energy lost in contacts: the ledger's, against the law's sum "
+            "over the isolated impacts", booked, law,
+            "coupled_impact per isolated impact, summed", None,
+            f"the ledger's contact term is the isolated impacts' {recorded_isolated:.4g} J (the "
+            f"law's {law:.4g} J) + the other impacts' {recorded_other:.4g} J + {rest:.4g} J in "
+            "contacts the impact log does not hold (granule pairs, the wall, a contact's steps "
+            "after its first, held granules' cells); apart from it the ledger books friction "
+            f"{float(energy.get('friction', 0.0)):.4g} J (floor, hinges) and drag "
+            f"{float(energy.get('drag', 0.0)):.4g} J, and closes to "
+            f"{float(energy.get('closure', math.nan)):+.2e}",
+            "J",
+        )
+    )  # fmt: skip
+
+
+def analyse_other(run: Run) -> Analysis:
+    """Any run: every impact against the impact law with friction."""
+    a = Analysis(run.name, "other")
+    a.series["impacts"] = all_impacts(run)
+    if reason := missing_impacts(run):
+        a.cannot(run, "every impact against the impact law with friction", reason)
+        return a
+    impact_law_rows(run, a)
+    slide_rows(run, a)
+    return a
+
+
+def slide_rows(run: Run, a: Analysis) -> None:
+    """Every slide along a hammer face against the disc on a face turning with the rotor
+    (:mod:`perga.stats.slide_law`): with rigid contacts the share of slides in the model's
+    regime whose velocity at the end agrees within 1 % (the same physics); soft contacts, or no
+    slide in the model's regime, as a regime that differs, with the errors' spread."""
+    statistic = "slides along a hammer face against the disc on a face turning with the rotor"
+    try:
+        checks = check_slides(run)
+    except ValueError as reason:
+        a.cannot(run, statistic, str(reason).split(": ", 1)[-1])
+        return
+    if not checks:
+        count = run.contacts["start"].size
+        a.cannot(
+            run, statistic,
+            f"none of the {count} granule-hammer contacts lasted {contact_time(run):.3g} s or "
+            "more (a slide outlasts a contact time)",
+        )  # fmt: skip
+        return
+    a.series["slide_checks"] = checks
+    summary = summarise_slides(checks)
+    on_face = summary.on_face
+    rigid = run.case.contact_model.kind == "rigid"
+    model = "DiscOnFace (slips and rolls; Coulomb face and floor friction)"
+    sample = on_face or [c for c in checks if math.isfinite(c.velocity_error)]
+    if not sample:
+        a.cannot(run, statistic, f"the model leaves the face before every slide ends: {checks}")
+        return
+    errors = np.array([c.velocity_error for c in sample])
+    worst = sample[int(np.argmax(errors))]
+    spread = (
+        f"{len(checks)} slides ({sum(c.duration for c in checks) * 1e3:.3g} ms in all), "
+        f"{len(on_face)} on a face turning with the rotor; velocity error there median "
+        f"{np.median(errors):.2e}, worst {worst.velocity_error:.2e} (granule {worst.granule} at "
+        f"{worst.start:.5g} s, {worst.duration * 1e3:.3g} ms); not in the model's regime: "
+        f"{summary.others}"
+    )
+    if rigid and on_face:
+        a.rows.append(
+            Row(
+                run.name, "slides",
+                f"share of {len(on_face)} slides on a face turning with the rotor whose "
+                "velocity at the end is within 1 %",
+                float(np.mean(errors <= AGREEMENT)), 1.0, model, AGREEMENT,
+                f"{spread}. The rigid step's first-order error grows with the slide's length",
+            )
+        )  # fmt: skip
+        return
+    speeds = np.array([c.exit_speed for c in sample])
+    why = (
+        "soft contacts: the granule rides on the contact's spring, the face's normal force is "
+        "not the rigid constraint's"
+        if not rigid
+        else "no slide is on a face turning with the rotor"
+    )
+    a.rows.append(
+        Row(
+            run.name, "slides", f"mean speed at the end of {len(sample)} slides",
+            float(speeds[:, 0].mean()), float(speeds[:, 1].mean()), model, None,
+            f"{spread}; {why}", "m/s",
+        )
+    )  # fmt: skip
