@@ -119,3 +119,25 @@ def test_the_separator_with_welded_hammers_slides_as_the_model(tmp_path: Path) -
     assert len(checks) >= 15 and len(summary.on_face) >= 10
     assert max(c.velocity_error for c in summary.on_face) < 0.01
     assert max(c.position_error for c in summary.on_face) < 0.01
+
+
+def test_the_soft_log_writes_each_impact_as_a_contact(tmp_path: Path) -> None:
+    """A soft run's contacts are its impacts' spans: one contact per impact, of the same
+    granule and hammer, starting one machine step before the impact's time (the state before
+    the step in which it began), lasting a whole number of steps (two or more: a soft contact
+    lasts t_c), the granule moved between its start and its end."""
+    run = tmp_path / "run"
+    case = str(ROOT / "cases" / "soft-single-granule.toml")
+    assert main(["run", case, "-o", str(run), "--quiet"]) == 0
+    loaded = load_run(run)
+    impacts, contacts = loaded.impacts, loaded.contacts
+    dt = loaded.summary["time_step"]["machine"]
+    assert impacts["time"].size >= 1 and contacts["start"].size == impacts["time"].size
+    for column in ("granule", "hammer"):
+        assert np.array_equal(contacts[column], impacts[column])
+    assert contacts["start"] == pytest.approx(impacts["time"] - dt, rel=1e-12)
+    assert np.all(contacts["steps"] >= 2)
+    assert contacts["end"] - contacts["start"] == pytest.approx(contacts["steps"] * dt, rel=1e-9)
+    assert np.array_equal(
+        contacts["x_start"] != contacts["x_end"], np.ones(impacts["time"].size, bool)
+    )
