@@ -103,7 +103,10 @@ class Contact:
     rad/s; other_contacts: the most contacts the
     granule had besides this one at once (rigid: in any of its steps; soft: at its start and
     end; a hammer's other pieces belong to this contact); held: the granule was held in its
-    cell at the start. Each contact model says what its start and end states are
+    cell at the start; touches: the contacts with other granules and the wall the granule had
+    begun before this one's first state (−1: not counted), so that no such contact began
+    between two of its contacts when both have the same count. Each contact model says what
+    its start and end states are
     (:mod:`perga.contact.rigid.impacts`, :mod:`perga.contact.soft.impacts`).
     """
 
@@ -124,6 +127,7 @@ class Contact:
     hammer_angular_velocity_end: float
     other_contacts: int
     held: bool
+    touches: int = -1
 
 
 @dataclass(frozen=True)

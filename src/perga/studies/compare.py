@@ -32,7 +32,13 @@ from perga.stats.energy import all_impacts, hinged_prediction, successive_energi
 from perga.stats.sweeps import blade_exit, blade_tip, efficiency_point
 from perga.stats.tables import Run
 from perga.stats.trajectory import amplitude_left, blade_frame, fit_exponential, free_flight
-from perga.studies.compare_any import analyse_other, impact_law_rows, slide_rows
+from perga.studies.compare_any import (
+    analyse_other,
+    contact_duration_rows,
+    flight_rows,
+    impact_law_rows,
+    slide_rows,
+)
 from perga.studies.compare_rows import AGREEMENT, Analysis, Row, missing_impacts
 from perga.studies.paper_check import Params, successive_model, vmax_decaying
 
@@ -413,6 +419,7 @@ def analyse_hinged(run: Run) -> Analysis:
         return a
     impact_law_rows(run, a)
     slide_rows(run, a)
+    flight_rows(run, a)
     if case.hammers.shape.kind == "plate":
         _hinged_rows(run, a, stats)
     _flight_rows(run, a, "realistic ω, f; x0 = r − R at the impact")
@@ -507,7 +514,9 @@ def _successive_rows(run: Run, a: Analysis) -> None:
 
 def analyse(runs: Iterable[Run], paper: Params | None = None) -> list[Analysis]:
     """Analyses of runs: sliding and hinged runs one by one, two-body and blade-exit runs as
-    sweeps (one analysis each)."""
+    sweeps (one analysis each), soft runs of one scene at several contact durations as one
+    more (:func:`~perga.studies.compare_any.contact_duration_rows`)."""
+    runs = list(runs)
     by_kind: dict[str, list[Run]] = {}
     analyses = []
     for run in runs:
@@ -527,4 +536,5 @@ def analyse(runs: Iterable[Run], paper: Params | None = None) -> list[Analysis]:
         analyses.append(analyse_blade(by_kind["blade"], paper))
     if "two-body" in by_kind:
         analyses.append(analyse_two_body(by_kind["two-body"], paper))
-    return analyses
+    durations = contact_duration_rows(runs, analyses)
+    return analyses if durations is None else [*analyses, durations]

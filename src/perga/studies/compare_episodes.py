@@ -1,12 +1,14 @@
 """The report's sections on a run's episodes, one by one: its impacts against the impact law
-(:mod:`perga.stats.impact_law`) and its slides along hammer faces against the disc on a face
-(:mod:`perga.stats.slide_law`): counts, shares, the spread of every statistic's error, the
-worst episodes with their regime and a verdict in words."""
+(:mod:`perga.stats.impact_law`), its slides along hammer faces against the disc on a face
+(:mod:`perga.stats.slide_law`) and its flights between contacts against the flight over the
+floor (:mod:`perga.stats.flight_law`): counts, shares, the spread of every statistic's error,
+the worst episodes with their regime and a verdict in words."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from perga.stats.flight_law import summarise_flights
 from perga.stats.impact_law import summarise
 from perga.stats.slide_law import summarise_slides
 from perga.studies.compare_rows import Analysis
@@ -87,18 +89,47 @@ def slide_summary(analysis: Analysis) -> dict[str, object] | None:
         "within_1_percent": within,
         "statistics": summary.statistics(),
         "statistics_off_face": summary.statistics(rest),
-        "worst": [
-            {
-                "granule": c.granule,
-                "time": c.start,
-                "duration": c.duration,
-                "regime": c.regime,
-                "error": c.velocity_error,
-            }
-            for c in summary.worst(WORST)
-        ],
+        "worst": _episodes(summary.worst(WORST)),
         "verdict": verdict,
     }
+
+
+def flight_summary(analysis: Analysis) -> dict[str, object] | None:
+    """The flights of one analysed run against the flight over the floor
+    (:func:`~perga.stats.flight_law.summarise_flights`): counts, every statistic's median and
+    largest error over the free flights, the worst, and a verdict in words; None without
+    checked flights."""
+    checks = analysis.series.get("flight_checks")
+    if not checks:
+        return None
+    summary = summarise_flights(checks)
+    errors = np.array([c.velocity_error for c in summary.free])
+    within = float(np.mean(errors <= 0.01))
+    verdict = (
+        f"{len(checks)} flights between contacts with the hammers, {len(summary.free)} free; on "
+        f"those the velocity before the next impact agrees with the flight over the floor "
+        f"within 1 % in {within:.0%} (median error {np.median(errors):.2e}, worst "
+        f"{errors.max():.2e}). Not free: {summary.others}."
+    )
+    return {
+        "run": analysis.name,
+        "flights": len(checks),
+        "free": len(summary.free),
+        "within_1_percent": within,
+        "statistics": summary.statistics(),
+        "worst": _episodes(summary.worst(WORST)),
+        "verdict": verdict,
+    }
+
+
+def _episodes(checks: list) -> list[dict[str, object]]:
+    """Slides or flights (their granule, start, duration, regime, velocity error) as plain
+    data."""
+    return [
+        {"granule": c.granule, "time": c.start, "duration": c.duration, "regime": c.regime,
+         "error": c.velocity_error}
+        for c in checks
+    ]  # fmt: skip
 
 
 def _statistics_table(heading: str, stats: dict[str, dict[str, float]], columns: str) -> list:
@@ -138,14 +169,29 @@ def slide_section(summaries: list[dict]) -> list[str]:
         lines += _statistics_table("on a face turning with the rotor", s["statistics"],
                                    "median | largest")  # fmt: skip
         lines += _statistics_table("the others", s["statistics_off_face"], "median | largest")
-        lines += [
-            "| worst | granule | start, s | length, ms | regime | velocity error |",
-            "|---|---|---|---|---|---|",
-        ]
-        lines += [
-            f"| {k + 1} | {w['granule']} | {w['time']:.6g} | {w['duration'] * 1e3:.3g} | "
-            f"{w['regime']} | {w['error']:.3e} |"
-            for k, w in enumerate(s["worst"])
-        ]
-        lines.append("")
+        lines += _worst_table(s["worst"])
+    return lines
+
+
+def _worst_table(worst: list[dict]) -> list[str]:
+    """Markdown lines: the worst episodes with their start, length and regime."""
+    lines = [
+        "| worst | granule | start, s | length, ms | regime | velocity error |",
+        "|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {k + 1} | {w['granule']} | {w['time']:.6g} | {w['duration'] * 1e3:.3g} | "
+        f"{w['regime']} | {w['error']:.3e} |"
+        for k, w in enumerate(worst)
+    ]
+    return [*lines, ""]
+
+
+def flight_section(summaries: list[dict]) -> list[str]:
+    """Markdown lines: each run's flights (:func:`flight_summary`)."""
+    lines = ["## Flights between contacts, one by one", ""]
+    for s in summaries:
+        lines += [f"**{s['run']}**: {s['verdict']}", ""]
+        lines += _statistics_table("free flights", s["statistics"], "median | largest")
+        lines += _worst_table(s["worst"])
     return lines

@@ -21,6 +21,8 @@ from perga.output.figures import new_figure, save
 from perga.stats.impact_law import ISOLATED
 from perga.stats.slide_law import ON_FACE
 from perga.studies.compare_episodes import (
+    flight_section,
+    flight_summary,
     impact_section,
     impact_summary,
     slide_section,
@@ -345,6 +347,9 @@ def write_report(
     slides = [s for a in analyses if (s := slide_summary(a)) is not None]
     if slides:
         lines += slide_section(slides)
+    flights = [s for a in analyses if (s := flight_summary(a)) is not None]
+    if flights:
+        lines += flight_section(flights)
     shown = set(written)
     for heading, group in (
         ("Agreement where the physics is the same", agree),
@@ -365,6 +370,7 @@ def write_report(
         "unavailable": [asdict(u) for u in unavailable],
         "impacts": impacts,
         "slides": slides,
+        "flights": flights,
         "largest_agreement_error": worst if agree else None,
     }
     (out / "report.json").write_text(json.dumps(data, indent=2, default=float) + "\n")

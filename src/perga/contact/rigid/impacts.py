@@ -12,8 +12,9 @@ of the relative contact velocity before and after (exact for one impulse).
 A contact goes on while any piece of the hammer touches the granule; when the last separates it
 is written as a :class:`~perga.model.records.Contact`: its first state is the granule's after
 its first step's impulses (the impact's "after"), its last the granule's after its last step's,
-its other contacts the most the granule had in any of its steps. A contact still open when the
-run ends is not written.
+its other contacts the most the granule had in any of its steps, its touches the granule's
+contacts with other granules and the wall begun before its first step's end. A contact still
+open when the run ends is not written.
 """
 
 from __future__ import annotations
@@ -103,6 +104,7 @@ class _Open:
     first: _Granule
     normal: tuple[float, float]
     held: bool
+    touches: int
     last: _Granule
     steps: int = 1
     others: int = 0
@@ -128,6 +130,7 @@ class _Open:
             hammer_angular_velocity_end=b.hammer_omega,
             other_contacts=self.others,
             held=self.held,
+            touches=self.touches,
         )
 
 
@@ -164,10 +167,13 @@ class RigidImpactLog:
         self._rows: dict[tuple[int, int], int] = {}
         self._rows_time = -1.0
         self._open: dict[tuple[int, int], _Open] = {}  # (granule, hammer) -> its contact
+        self._touches: dict[int, int] = {}  # granule -> contacts begun with granules, the wall
         start = "pre_solve" if rewritten else "begin"
         bodies.listen(start, self._start, ("granule", "hammer"))
         bodies.listen("post_solve", self._post_solve, ("granule", "hammer"))
         bodies.listen("separate", self._separate, ("granule", "hammer"))
+        bodies.listen("begin", self._touch, ("granule", "granule"))
+        bodies.listen("begin", self._touch, ("granule", "wall"))
 
     def _key(self, arbiter: pymunk.Arbiter) -> tuple[int, int]:
         granule_shape, hammer_shape = arbiter.shapes
@@ -247,13 +253,21 @@ class RigidImpactLog:
         contact = self._open.get(key)
         if contact is None:
             now = _Granule.read(self.time, arbiter)
-            contact = _Open(now, tuple(-arbiter.normal), key[0] in self._held, now)
+            held, touches = key[0] in self._held, self._touches.get(key[0], 0)
+            contact = _Open(now, tuple(-arbiter.normal), held, touches, now)
             self._open[key] = contact
         elif contact.last.time != self.time:
             contact.last = _Granule.read(self.time, arbiter)
             contact.steps += 1
         contact.others = max(contact.others, others)
         contact.shapes.add(shapes)
+
+    def _touch(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
+        """Count a contact begun with another granule or the wall on each granule of it."""
+        for shape in arbiter.shapes:
+            kind, id_ = self._owner.get(shape, ("wall", -1))
+            if kind == "granule":
+                self._touches[id_] = self._touches.get(id_, 0) + 1
 
     def _separate(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, _data: object) -> None:
         shapes = tuple(arbiter.shapes)
