@@ -86,7 +86,8 @@ def test_the_main_run_against_the_impact_law(tmp_path):
     assert impacts["isolated"] > 0.8 * impacts["impacts"] > 250
     assert "are isolated; on those the velocity after agrees" in impacts["verdict"]
     stats = impacts["statistics"]
-    assert len(stats) == 6  # velocity, spin, restitution, slip, energy lost and given
+    assert len(stats) == 7  # velocity, spin, restitution, slip, energy lost, given, per granule
+    assert stats["energy lost per granule (relative)"]["p99"] < 0.01
     # Newton's law as the solver holds it: exact to rounding in most impacts (median), to
     # 8.2e-4 in the slowest (99th percentile: ten iterations of the contact and the pin)
     assert stats["normal restitution (relative)"]["median"] < 1e-9

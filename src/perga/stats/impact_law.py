@@ -204,7 +204,8 @@ class ImpactSummary:
         """Median and 99th percentile of each compared statistic's error over the isolated
         impacts: the velocity and spin after (:class:`ImpactCheck`'s errors), the normal
         restitution (relative), the slip's ratio (absolute), the energy lost (over the relative
-        kinetic energy before, ½m·u²) and given (over the kinetic energy after, ½m·v′²)."""
+        kinetic energy before, ½m·u²) and given (over the kinetic energy after, ½m·v′²), and
+        each granule's energy lost in its isolated impacts (relative to the law's sum)."""
         iso = self.isolated
         columns = {
             "velocity after (over the speed after)": [(c.velocity_error, 0.0, 1.0) for c in iso],
@@ -216,6 +217,14 @@ class ImpactSummary:
             "energy lost (over ½m·u² before)": [(*c.dissipated, c.relative_energy) for c in iso],
             "energy given (over ½m·v′² after)": [(*c.granule_gain, c.lab_energy) for c in iso],
         }
+        granules = sorted({c.granule for c in iso})
+        lost = {g: [0.0, 0.0] for g in granules}
+        for c in iso:
+            lost[c.granule][0] += c.dissipated[0]
+            lost[c.granule][1] += c.dissipated[1]
+        columns["energy lost per granule (relative)"] = [
+            (sim, law, abs(law)) for sim, law in lost.values() if law
+        ]
         out = {}
         for name, rows in columns.items():
             errors = np.array([abs(a - b) / scale for a, b, scale in rows if math.isfinite(b)])

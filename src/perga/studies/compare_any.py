@@ -96,6 +96,7 @@ def impact_law_rows(run: Run, a: Analysis) -> list[ImpactCheck]:
         )
     )  # fmt: skip
     _energy_row(run, a, checks, isolated)
+    _successive_row(run, a, isolated)
     return checks
 
 
@@ -310,5 +311,37 @@ def flight_rows(run: Run, a: Analysis) -> None:
             f"{np.median(errors):.2e}, worst {worst.velocity_error:.2e} (granule "
             f"{worst.granule} from {worst.start:.5g} s, {worst.duration * 1e3:.3g} ms); not "
             f"free: {summary.others}",
+        )
+    )  # fmt: skip
+
+
+def _successive_row(run: Run, a: Analysis, isolated: list[ImpactCheck]) -> None:
+    """Successive isolated impacts of each granule against the paper's e^{2i}: the energy of
+    the normal approach to the next impact over the last rebound's, 1 where nothing feeds the
+    granule between impacts (the paper's regime)."""
+    u_n = run.impacts["normal_velocity_before"]
+    e = run.case.granule_hammer_contact.restitution
+    by_granule: dict[int, list[ImpactCheck]] = {}
+    for c in isolated:
+        by_granule.setdefault(c.granule, []).append(c)
+    ratios = np.array([
+        u_n[b.index] ** 2 / (e * u_n[a_.index]) ** 2
+        for impacts in by_granule.values()
+        for a_, b in pairwise(sorted(impacts, key=lambda c: c.time))
+    ])  # fmt: skip
+    if not ratios.size:
+        a.cannot(run, "successive impacts against the paper's e^{2i}",
+                 "no granule has two isolated impacts")  # fmt: skip
+        return
+    q10, q50, q90 = np.quantile(ratios, (0.1, 0.5, 0.9))
+    a.rows.append(
+        Row(
+            run.name, "impacts",
+            "a granule's next normal approach energy over its last rebound's (e^{2i}: 1)",
+            float(q50), 1.0, "the paper's e^{2i}: each impact meets the last rebound", None,
+            f"{ratios.size} pairs of successive isolated impacts of one granule; 10th, 50th, "
+            f"90th percentiles {q10:.3g}, {q50:.3g}, {q90:.3g}. Between impacts the floor and the "
+            "hammers feed the granule (a hammer meets it again at its own speed ωR): each impact "
+            "starts afresh, and the energy after i impacts is not e^{2i} of the first",
         )
     )  # fmt: skip
