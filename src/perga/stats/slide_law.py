@@ -9,8 +9,8 @@ A **slide** is a granule-hammer contact that lasts longer than a contact time: a
 its start: x along the face, outward, from the foot of the perpendicular from the axis; +y the
 direction of rotation; the granule's centre at y = h; the face leading when the hammer's
 normal points along +y. The model turns that frame with the rotor for the slide's duration T
-and is compared at its end: the granule's velocity along the face and across it, its position
-along the face, its spin and the speed of its centre in the fixed frame.
+and is compared at its end: the granule's velocity (fixed frame), its position along the face,
+its spin and its speed.
 
 A slide is in the model's regime (**on a face turning with the rotor**) when nothing else
 touches the granule (contacts.csv's ``other_contacts`` 0), it is not held in a cell, and its
@@ -57,14 +57,13 @@ class SlideCheck:
     hammer_lag: float
     """θ_hammer − ωT over the slide, rad (0: it turned with the rotor)."""
     velocity_error: float
-    """|v_sim − v_model| of the granule's velocity relative to the face at the end (along and
-    across it, rotating frame) over the larger of its speeds along the face, the model's at the
-    end and the granule's at the start."""
+    """|v_sim − v_model| / |v_model|: the granule's velocity at the end, fixed frame (as an
+    impact's velocity after is compared)."""
     position_error: float
     """|x_sim − x_model| / |x_model − x0|: its position along the face at the end, over the
     model's travel."""
     spin_error: float
-    """|Ω_sim − Ω_model|·a: the spin at the end as a rim speed, over the velocity's scale."""
+    """|Ω_sim − Ω_model|·a / |v_model|: the spin at the end as a rim speed."""
     exit_speed: tuple[float, float]
     """The speed of the granule's centre in the fixed frame at the end, m/s, simulated and
     model."""
@@ -152,13 +151,15 @@ class _Frame:
         return cls(along, across, float(p0 @ along), float(p0 @ across),
                    float(relative @ along), face)  # fmt: skip
 
-    def end(self, row: dict[str, float], w: float, T: float) -> tuple[float, np.ndarray]:
-        """The simulated end in this frame turned with the rotor through ωT: x (m) and the
-        velocity relative to the face, along and across it (m/s)."""
-        p1 = _rotate(np.array([row["x_end"], row["y_end"]]), -w * T)
-        v1 = _rotate(np.array([row["vx_end"], row["vy_end"]]), -w * T)
-        relative = v1 - w * np.array([-p1[1], p1[0]])
-        return float(p1 @ self.along), np.array([relative @ self.along, relative @ self.across])
+    def along_at_end(self, row: dict[str, float], w: float, T: float) -> float:
+        """The simulated end's x (m) in this frame turned with the rotor through ωT."""
+        return float(_rotate(np.array([row["x_end"], row["y_end"]]), -w * T) @ self.along)
+
+    def fixed_velocity(self, x: float, u: float, w: float, T: float) -> np.ndarray:
+        """The fixed-frame velocity (m/s) of a granule at x on the face's line, moving along it
+        at u, after the face turned through ωT."""
+        p = x * self.along + self.h * self.across
+        return _rotate(u * self.along + w * np.array([-p[1], p[0]]), w * T)
 
 
 def check_slides(run: Run) -> list[SlideCheck]:
@@ -187,8 +188,10 @@ def check_slides(run: Run) -> list[SlideCheck]:
             point = slide.integrate(frame.x0, frame.u0, T)
             x_m, u_m, spin_m, event, rolled = point.x[-1], point.v[-1], 0.0, point.event, 0.0
             left = point.t[-1]
-        x1, relative = frame.end(row, w, T)
-        scale = max(abs(u_m), abs(frame.u0)) or 1.0
+        x1 = frame.along_at_end(row, w, T)
+        v_law = frame.fixed_velocity(x_m, u_m, w, T)
+        v_sim = np.array([row["vx_end"], row["vy_end"]])
+        speed = float(np.hypot(*v_law))
         lag = row["hammer_turn"] - w * T
         stays = event != "separated"
         regime = _regime(row, lag, w * T) if stays else (
@@ -204,14 +207,12 @@ def check_slides(run: Run) -> list[SlideCheck]:
                 regime=regime,
                 face=frame.face,
                 hammer_lag=lag,
-                velocity_error=float(np.hypot(relative[0] - u_m, relative[1])) / scale
-                if stays else math.nan,
+                velocity_error=float(np.hypot(*(v_sim - v_law))) / speed if stays else math.nan,
                 position_error=abs(x1 - x_m) / max(abs(x_m - frame.x0), a)
                 if stays else math.nan,
-                spin_error=abs(row["spin_end"] - spin_m) * a / scale
+                spin_error=abs(row["spin_end"] - spin_m) * a / speed
                 if stays and rolls else math.nan,
-                exit_speed=(math.hypot(row["vx_end"], row["vy_end"]),
-                            math.hypot(u_m - w * frame.h, w * x_m)),
+                exit_speed=(float(np.hypot(*v_sim)), speed),
                 travel=float(x_m - frame.x0),
                 rolled=rolled,
                 model_event=event,
@@ -251,10 +252,10 @@ class SlideSummary:
         a face turning with the rotor)."""
         chosen = self.on_face if checks is None else checks
         columns = {
-            "velocity at the end (relative to the face)": [c.velocity_error for c in chosen],
+            "velocity at the end (over its speed)": [c.velocity_error for c in chosen],
             "position along the face (over the travel)": [c.position_error for c in chosen],
             "spin at the end (rim speed, over the velocity)": [c.spin_error for c in chosen],
-            "speed in the fixed frame (relative)": [
+            "speed at the end (relative)": [
                 abs(c.exit_speed[0] / c.exit_speed[1] - 1) for c in chosen
             ],
         }
