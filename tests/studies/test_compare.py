@@ -37,12 +37,15 @@ def _rows(data: dict, run: str, model: str = "") -> list[dict]:
 
 
 def test_every_figure_is_written(report) -> None:
+    """Every figure but the slides' (perga compare on any run): the paper's sliding runs are
+    the blade sweep, which records trajectories, not contacts, and the decaying branch, whose
+    one slide is still on when its run ends (a contact is written when it ends)."""
     out, data = report
-    assert set(data["figures"]) == set(FIGURES)
+    assert set(data["figures"]) == set(FIGURES) - {"slides"}
     for path in data["figures"].values():
         assert (out / path).stat().st_size > 10_000
     text = (out / "report.md").read_text()
-    for key in FIGURES:
+    for key in data["figures"]:
         assert f"figures/fig{key}.png" in text
 
 

@@ -176,7 +176,7 @@ def slide_rows(run: Run, a: Analysis) -> None:
             "more (a slide outlasts a contact time)",
         )  # fmt: skip
         return
-    a.series["slide_checks"] = checks
+    a.series.setdefault("slide_checks", []).extend(checks)
     summary = summarise_slides(checks)
     inward = [c for c in checks if c.face == "trailing" and c.travel < 0]
     a.cannot(
