@@ -34,7 +34,7 @@ def study(dt: float) -> Study:
             "granules.placement.angle": Parameter(values=angles),
             "solver.dt": Parameter(values=[dt]),
         },
-        metrics=["first_impact_restitution", "first_impact_tangential_restitution"],
+        metrics=["first_impact_restitution", "first_impact_tangential_restitution_contact"],
     )
 
 

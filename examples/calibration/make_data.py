@@ -25,7 +25,7 @@ HERE = Path(__file__).resolve().parent
 CASE = HERE.parents[1] / "cases" / "rebound-test.toml"
 TRUE = {"contacts.granule-hammer.restitution": 0.72, "contacts.granule-hammer.friction": 0.28}
 ANGLES = [0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4]
-NOISE = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution": 0.02}
+NOISE = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution_contact": 0.02}
 SEED = 2026
 
 

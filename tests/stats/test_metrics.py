@@ -45,18 +45,29 @@ def test_first_impact_metrics_equal_the_impulse_law(tmp_path: Path, angle: float
     assert evaluate(run, "impact_count") == 1
     assert evaluate(run, "first_impact_restitution") == pytest.approx(0.7, abs=1e-12)
     # impacts.csv's tangent is n turned +90° (−x here): v_t = −s, and β = −v_t'/v_t = −s'/s
-    beta = evaluate(run, "first_impact_tangential_restitution")
+    beta = evaluate(run, "first_impact_tangential_restitution_contact")
     assert beta == pytest.approx(-exact.slip_after / exact.slip_before, abs=2e-3)
-    rebound = evaluate(run, "first_impact_rebound_angle")
+    rebound = evaluate(run, "first_impact_rebound_angle_contact")
     normal_after = exact.normal_velocity
     assert rebound == pytest.approx(math.atan2(-exact.slip_after, normal_after), abs=2e-3)
+    # the centre: its own tangential velocity, v sin θ before
+    centre = evaluate(run, "first_impact_tangential_restitution_centre")
+    assert centre == pytest.approx(-exact.tangential_velocity / (v * math.sin(angle)), abs=2e-3)
+    rebound = evaluate(run, "first_impact_rebound_angle_centre")
+    assert rebound == pytest.approx(math.atan2(-exact.tangential_velocity, normal_after), abs=2e-3)
+    for name in ("first_impact_tangential_restitution_centre",
+                 "first_impact_tangential_restitution_contact"):  # fmt: skip
+        low, high = METRICS[name].bounds
+        assert low <= evaluate(run, name) <= high or spin != 0.0
     assert abs(evaluate(run, "ledger_closure")) < 1e-9
 
 
 def test_unavailable_metrics_say_why(tmp_path: Path) -> None:
     _, run = _shot(tmp_path, "granules.placement.angle=0.0")
     with pytest.raises(MetricUnavailableError, match="head-on impact has no tangential"):
-        evaluate(run, "first_impact_tangential_restitution")
+        evaluate(run, "first_impact_tangential_restitution_contact")
+    with pytest.raises(MetricUnavailableError, match="head-on"):
+        evaluate(run, "first_impact_tangential_restitution_centre")
     with pytest.raises(MetricUnavailableError, match="made 1 impacts, not 2"):
         evaluate(run, "granule_speed_after_impact:2")
     with pytest.raises(MetricUnavailableError, match="outside the run"):
@@ -73,6 +84,7 @@ def test_unavailable_metrics_say_why(tmp_path: Path) -> None:
     ("name", "message"),
     [
         ("bogus", "unknown metric 'bogus'; metrics: impact_count"),
+        ("first_impact_tangential_restitution", "is now two: first_impact_tangential_restitution_"),
         ("radius_at", "write it as radius_at:ARG"),
         ("impact_count:3", "write it as impact_count"),
         ("radius_at:soon", "'soon' is not a number"),

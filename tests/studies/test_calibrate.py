@@ -5,12 +5,14 @@ ranges exit 2 naming the file and the field."""
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from perga import __version__
 from perga.cli import main
 from perga.studies.calibrate import Calibration, Data, Fit, calibrate
 from perga.studies.calibrate_report import write_plots
@@ -21,7 +23,7 @@ from tests.figure_data import lines, saved_figures
 ROOT = Path(__file__).resolve().parents[2]
 CASE = ROOT / "cases" / "rebound-test.toml"
 TRUE = {"contacts.granule-hammer.restitution": 0.66, "contacts.granule-hammer.friction": 0.35}
-SD = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution": 0.02}
+SD = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution_contact": 0.02}
 FITS = ["contacts.granule-hammer.restitution=0.3:0.95", "contacts.granule-hammer.friction=0.05:0.8"]
 
 
@@ -49,7 +51,8 @@ def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> Non
     _synthetic(data, tmp_path / "truth", seed=11)
     out = tmp_path / "fit"
     saved = saved_figures(monkeypatch)
-    result = calibrate(CASE, data, FITS, out, workers=2)
+    said: list[str] = []
+    result = calibrate(CASE, data, FITS, out, workers=2, progress=said.append)
     write_plots(result, out)
     fit = result.fit
     for key, (lo, hi), value in zip(fit.keys, fit.intervals, fit.values, strict=True):
@@ -57,6 +60,15 @@ def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> Non
         assert hi - lo < 0.05 and abs(value - TRUE[key]) < 0.03
     record = json.loads((out / "fit.json").read_text())
     assert record["method"] == "least-squares" and len(record["simulated"]) == 6
+    # provenance: what was fitted to what, by which method and perga
+    provenance = record["provenance"]
+    assert provenance["data_sha256"] == hashlib.sha256(data.read_bytes()).hexdigest()
+    assert provenance["case_sha256"] == hashlib.sha256(CASE.read_bytes()).hexdigest()
+    assert provenance["method"] == "least-squares" and provenance["perga"] == __version__
+    # progress after every batch: the runs so far, growing, and the best vector with its RSS
+    runs = [int(line.split()[1]) for line in said]
+    assert runs == sorted(runs) and runs[-1] == fit.runs and len(said) >= 3
+    assert "best so far contacts.granule-hammer.restitution = " in said[-1]
     best = (out / "best.toml").read_text()
     assert f"restitution = {fit.values[0]!r}" in best
     # the figures draw the fit's numbers (issue 18, item 6): the measured points, the model at

@@ -26,7 +26,7 @@ STUDY = {
     "samples": 16,
     "replicates": 2,
     "seed": 0,
-    "metrics": ["first_impact_restitution", "first_impact_rebound_angle"],
+    "metrics": ["first_impact_restitution", "first_impact_rebound_angle_centre"],
     "parameters": {
         "granules.placement.angle": {"values": [0.2, 0.6, 1.0, 1.3]},
         "contacts.granule-hammer.friction": {"range": [0.1, 0.5], "points": 3},

@@ -23,7 +23,7 @@ from perga.studies.sweep import sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 CASE = ROOT / "cases" / "rebound-test.toml"
-METRICS = ["first_impact_restitution", "first_impact_tangential_restitution"]
+METRICS = ["first_impact_restitution", "first_impact_tangential_restitution_contact"]
 
 
 def _study(points: int = 8, dt: float = 2e-6) -> Study:
@@ -107,7 +107,8 @@ def test_sweep_on_a_cluster_survives_a_killed_worker(cluster, tmp_path: Path) ->
         theta = row["granules.placement.angle"]
         sliding = 3 * 0.3 * 1.7 / math.tan(theta) - 1  # disc: slip stops unless tan θ > 3f(1+e)
         expected = min(sliding, 0.0)
-        assert row["first_impact_tangential_restitution"] == pytest.approx(expected, abs=2e-3)
+        beta = row["first_impact_tangential_restitution_contact"]
+        assert beta == pytest.approx(expected, abs=2e-3)
 
 
 def test_a_finished_study_runs_nothing_and_an_interrupted_one_only_what_is_missing(

@@ -123,6 +123,7 @@ def calibrate(args: argparse.Namespace) -> int:
             steps=args.steps,
             scheduler=args.scheduler,
             workers=args.workers,
+            progress=None if args.quiet else lambda line: print(line, file=sys.stderr),
         )
     except StudyError as exc:
         return problems(exc.problems)
@@ -146,6 +147,8 @@ def metrics(args: argparse.Namespace) -> int:
         for m in METRICS.values():
             arg = f":ARG ({m.argument})" if m.argument else ""
             print(f"{m.name}{arg} [{m.unit}]: {m.description}")
+            if m.bounds is not None:
+                print(f"    in [{m.bounds[0]:.6g}, {m.bounds[1]:.6g}]: {m.convention}")
         return 0
     try:
         run = load_run(args.run)
@@ -231,6 +234,9 @@ def add_parsers(add: AddParser) -> None:
     parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
     parser.add_argument("--workers", type=int, help="local worker processes")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress lines (runs so far, best vector)"
+    )
     parser.set_defaults(handler=calibrate)
     parser = add("metrics", help="the metrics of a run (or, without RUN, the list)")
     parser.add_argument("run", type=Path, nargs="?", metavar="RUN")

@@ -38,9 +38,16 @@ class ImpactStats:
     restitution: float
     """e = −v_n'/v_n, -."""
     tangential_restitution: float
-    """β = −v_t'/v_t, - (nan for a head-on impact, |v_t| <= HEAD_ON·|v_n|)."""
+    """β = −v_t'/v_t of the contact point, - (nan for a head-on impact, |v_t| <= HEAD_ON·|v_n|)."""
     rebound_angle: float
-    """atan2(v_t', v_n'): the relative velocity after the impact from the normal, rad."""
+    """atan2(v_t', v_n'): the contact point's relative velocity after the impact from the
+    normal, rad."""
+    tangential_restitution_centre: float
+    """β_c = −u_t'/u_t of the granule's centre, u_t = v_t + ω r its tangential velocity relative
+    to the hammer's material point at the contact, - (nan head-on, or without the spins)."""
+    rebound_angle_centre: float
+    """atan2(u_t', v_n'): the centre's relative velocity after the impact from the normal, rad
+    (nan without the spins)."""
     rebound_speed: float
     """|(v_n', v_t')|, the relative speed after the impact, m/s."""
     reduced_mass: float
@@ -69,6 +76,16 @@ class ImpactStats:
     def as_dict(self) -> dict[str, float]:
         """Plain data for JSON."""
         return asdict(self)
+
+
+def granule_radius(run: Run, granule: int) -> float:
+    """A granule's radius, m: granules.csv's where recorded, else the case's."""
+    g = run.granules
+    if g and "radius" in g:
+        rows = g["id"] == granule
+        if rows.any():
+            return float(g["radius"][rows][0])
+    return run.case.granules.radius
 
 
 def granule_energy(run: Run, granule: int, t: float, before: bool = True) -> float:
@@ -102,6 +119,10 @@ def impact_stats(run: Run, index: int) -> ImpactStats:
     row = {k: float(v[index]) for k, v in run.impacts.items()}
     vn, vn1 = row["normal_velocity_before"], row["normal_velocity_after"]
     vt, vt1 = row["tangential_velocity_before"], row["tangential_velocity_after"]
+    # the centre moves along t at the contact point's velocity plus its rim's, ω r
+    r = granule_radius(run, int(row["granule"]))
+    ut = vt + row.get("granule_spin_before", math.nan) * r
+    ut1 = vt1 + row.get("granule_spin_after", math.nan) * r
     mu = _ratio(row["normal_impulse"], vn1 - vn)
     relative_energy = 0.5 * mu * vn**2
     before = granule_energy(run, int(row["granule"]), row["time"])
@@ -113,6 +134,8 @@ def impact_stats(run: Run, index: int) -> ImpactStats:
         restitution=_ratio(-vn1, vn),
         tangential_restitution=_ratio(-vt1, vt) if abs(vt) > HEAD_ON * abs(vn) else math.nan,
         rebound_angle=math.atan2(vt1, vn1),
+        tangential_restitution_centre=_ratio(-ut1, ut) if abs(ut) > HEAD_ON * abs(vn) else math.nan,
+        rebound_angle_centre=math.atan2(ut1, vn1),
         rebound_speed=math.hypot(vn1, vt1),
         reduced_mass=mu,
         normal_loss=1 - _ratio(vn1, vn) ** 2,

@@ -11,12 +11,17 @@ uses, read for one granule (granule 0 unless said otherwise). The process metric
 run: the comb at t = 0 and the granules at the end (granules.csv), releases.csv, the product
 (outflow.csv), the drive's work (summary.json).
 
-Impact conventions (impacts.csv, :class:`perga.model.records.Impact`): velocities of the
-granule's contact point relative to the hammer's, normal v_n (< 0 approaching) and tangential
-v_t, before and after. The normal restitution is e = −v_n'/v_n; the tangential one
-β = −v_t'/v_t (−1: the tangential velocity kept, as in frictionless sliding; 0: stopped; > 0:
-reversed, as in a sticking contact of a spinning disc); the rebound angle is the angle of the
-relative velocity after the impact from the normal, atan2(v_t', v_n'), rad.
+Impact conventions (impacts.csv, :class:`perga.model.records.Impact`): velocities relative to
+the hammer's material point at the contact, normal v_n (< 0 approaching) and tangential, before
+and after. The normal restitution is e = −v_n'/v_n. The tangential restitution and the rebound
+angle are given at two points, as experiments report one or the other: at the granule's
+**centre** (``_centre``: u_t = v_t + ω r, what oblique-impact tests that track the sphere's
+centre report, e.g. Kharaz, Gorham & Salman 2001) and at the **contact point** (``_contact``:
+v_t, the slip, what tests that also measure the spin report, e.g. Foerster et al. 1994).
+β = −v'/v (−1: the tangential velocity kept, as in frictionless sliding; 0: stopped); the
+rebound angle is atan2(tangential', v_n'), rad, the velocity after from the normal. Each metric
+states its convention and, where the physics bounds it, the range a measured value must lie in
+(:class:`Metric`); ``perga metrics`` lists them.
 """
 
 from __future__ import annotations
@@ -38,13 +43,26 @@ class MetricUnavailableError(Exception):
 @dataclass(frozen=True)
 class Metric:
     """A named metric: its unit, what it is, and how a run gives it (``argument``: what the
-    text after the colon is, or None for a metric without one)."""
+    text after the colon is, or None for a metric without one); ``bounds``: the closed range
+    every value lies in where the physics bounds it, with ``convention`` saying why (a measured
+    value outside it has another convention or is wrong)."""
 
     name: str
     unit: str
     description: str
     compute: Callable[[Run, float | None], float]
     argument: str | None = None
+    bounds: tuple[float, float] | None = None
+    convention: str = ""
+
+
+RENAMED = {
+    "first_impact_tangential_restitution": "first_impact_tangential_restitution_centre or "
+    "first_impact_tangential_restitution_contact",
+    "first_impact_rebound_angle": "first_impact_rebound_angle_centre or "
+    "first_impact_rebound_angle_contact",
+}
+"""Metrics that are now two, one per point of the granule (the module docstring)."""
 
 
 def _impact_rows(run: Run, granule: int = 0) -> np.ndarray:
@@ -83,14 +101,28 @@ def first_impact_restitution(run: Run, _: float | None = None) -> float:
     return _first(run, "restitution", "e (no normal approach)")
 
 
-def first_impact_tangential_restitution(run: Run, _: float | None = None) -> float:
-    """β = −v_t'/v_t of granule 0's first impact."""
+def first_impact_tangential_restitution_contact(run: Run, _: float | None = None) -> float:
+    """β = −v_t'/v_t of the contact point, granule 0's first impact."""
     return _first(run, "tangential_restitution", "β (a head-on impact has no tangential motion)")
 
 
-def first_impact_rebound_angle(run: Run, _: float | None = None) -> float:
-    """atan2(v_t', v_n') of granule 0's first impact, rad."""
+def first_impact_tangential_restitution_centre(run: Run, _: float | None = None) -> float:
+    """β_c = −u_t'/u_t of the centre, granule 0's first impact."""
+    return _first(
+        run,
+        "tangential_restitution_centre",
+        "β at the centre (head-on, or an older run without the granule's spin)",
+    )
+
+
+def first_impact_rebound_angle_contact(run: Run, _: float | None = None) -> float:
+    """atan2(v_t', v_n') of the contact point, granule 0's first impact, rad."""
     return _first(run, "rebound_angle", "a rebound angle")
+
+
+def first_impact_rebound_angle_centre(run: Run, _: float | None = None) -> float:
+    """atan2(u_t', v_n') of the centre, granule 0's first impact, rad."""
+    return _first(run, "rebound_angle_centre", "a rebound angle (an older run without spins)")
 
 
 def first_impact_rebound_speed(run: Run, _: float | None = None) -> float:
@@ -239,12 +271,28 @@ METRICS: dict[str, Metric] = {
     for m in (
         Metric("impact_count", "-", "granule-hammer impacts recorded", impact_count),
         Metric("first_impact_restitution", "-", "e = −v_n'/v_n, first impact of granule 0",
-               first_impact_restitution),
-        Metric("first_impact_tangential_restitution", "-",
-               "β = −v_t'/v_t, first impact of granule 0", first_impact_tangential_restitution),
-        Metric("first_impact_rebound_angle", "rad",
-               "atan2(v_t', v_n'), the rebound from the normal, first impact of granule 0",
-               first_impact_rebound_angle),
+               first_impact_restitution, bounds=(0.0, 1.0),
+               convention="the normal rebound over the approach, both positive: 0 plastic, "
+               "1 elastic"),
+        Metric("first_impact_tangential_restitution_centre", "-",
+               "β = −u_t'/u_t of the granule's centre, first impact of granule 0",
+               first_impact_tangential_restitution_centre, bounds=(-1.0, 0.0),
+               convention="−1: the centre keeps its tangential velocity; friction only slows "
+               "it (a granule without spin before: a ratio u_t'/u_t > 0 has the other sign)"),
+        Metric("first_impact_tangential_restitution_contact", "-",
+               "β = −v_t'/v_t of the contact point (the slip), first impact of granule 0",
+               first_impact_tangential_restitution_contact, bounds=(-1.0, 1.0),
+               convention="−1: the slip kept; 0: stopped (sticking); > 0: reversed by a "
+               "tangential spring"),
+        Metric("first_impact_rebound_angle_centre", "rad",
+               "atan2(u_t', v_n'): the centre's rebound from the normal, first impact of "
+               "granule 0", first_impact_rebound_angle_centre, bounds=(-math.pi / 2, math.pi / 2),
+               convention="from the normal, the sign of the incidence's tangential velocity"),
+        Metric("first_impact_rebound_angle_contact", "rad",
+               "atan2(v_t', v_n'): the contact point's rebound from the normal, first impact of "
+               "granule 0", first_impact_rebound_angle_contact,
+               bounds=(-math.pi / 2, math.pi / 2),
+               convention="from the normal, the sign of the incidence's tangential velocity"),
         Metric("first_impact_rebound_speed", "m/s",
                "relative speed after the first impact of granule 0", first_impact_rebound_speed),
         Metric("granule_speed_after_impact", "m/s",
@@ -274,6 +322,11 @@ def parse_metric(name: str) -> tuple[Metric, float | None]:
     """``NAME`` or ``NAME:ARG`` -> the metric and its argument (ValueError naming the allowed
     names or the argument it needs)."""
     base, sep, arg = name.partition(":")
+    if base in RENAMED:
+        raise ValueError(
+            f"metric {name!r} is now two: {RENAMED[base]} (the granule's centre, which "
+            "oblique-impact tests tracking the sphere report, or its contact point)"
+        )
     metric = METRICS.get(base)
     if metric is None:
         raise ValueError(f"unknown metric {name!r}; metrics: {', '.join(METRICS)}")

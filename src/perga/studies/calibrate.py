@@ -27,6 +27,7 @@ interrupted calibration resumes where it stopped and repeated points cost nothin
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 from collections.abc import Callable
@@ -39,9 +40,11 @@ import tomli_w
 from distributed import Client
 from scipy import optimize, stats
 
+from perga import __version__
 from perga.case.load import overridden, read_case_data
 from perga.case.overrides import OverrideError, parse_value, split_override
 from perga.stats.metrics import METRICS
+from perga.studies.column_units import split_unit, to_si
 from perga.studies.executor import dask_client, execute
 from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
 from perga.studies.study_file import StudyError, check_keys, check_metrics
@@ -104,11 +107,35 @@ def _finite(text: str) -> float:
     return value if math.isfinite(value) else math.nan
 
 
+def _condition(text: str, factor: float) -> Any:
+    """A condition cell as the case takes it: a number in a column with a unit, to SI."""
+    value = parse_value(text)
+    if factor != 1.0 and isinstance(value, int | float) and not isinstance(value, bool):
+        return value * factor
+    return value
+
+
+def _out_of_bounds(metric: str, value: float) -> str | None:
+    """Why a measured ``value`` of ``metric`` (SI) cannot be, or None (its bounds)."""
+    m = METRICS[metric.partition(":")[0]]
+    if m.bounds is None or m.bounds[0] <= value <= m.bounds[1]:
+        return None
+    low, high = m.bounds
+    flipped = low <= -value <= high
+    return (
+        f"{value:.6g} is outside [{low:.6g}, {high:.6g}] ({m.convention})"
+        + ("; its negative is inside: data of the other sign convention? negate the column"
+           if flipped else "; data in another unit? give it in brackets: NAME [UNIT]")
+    )  # fmt: skip
+
+
 def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     """The data file, checked against the case (StudyError listing every problem: a metric
     that does not exist, a row of the wrong length, a condition column that is not a case key
-    or a row whose values the case refuses, a value that is not a finite number, an sd that is
-    not a finite number > 0)."""
+    or a row whose values the case refuses, a value that is not a finite number or lies outside
+    its metric's bounds, an sd that is not a finite number > 0, a unit unknown or of another
+    dimension). Columns may carry their units, ``NAME [UNIT]`` (:mod:`~perga.studies.
+    column_units`): values are converted to SI."""
     path = Path(path)
     try:
         with path.open(encoding="utf-8", newline="") as stream:
@@ -118,7 +145,9 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     lines = [(i, row) for i, row in enumerate(cells, start=2) if any(c.strip() for c in row)]
     if not lines:
         raise StudyError([f"{path}: no rows (a header and one row per measured condition)"])
-    named = [c for c in columns if c.strip()]
+    header = [split_unit(c) for c in columns]
+    columns = [name for name, _ in header]
+    named = [c for c in columns if c]
     if len(set(named)) != len(columns):
         raise StudyError([f"{path}: line 1: every column needs a name of its own ({columns})"])
     short = [i for i, row in lines if len(row) != len(columns)]
@@ -131,6 +160,14 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     sds = [c for c in columns if c.endswith(SD_SUFFIX) and c[: -len(SD_SUFFIX)] in metrics]
     conditions = [c for c in columns if c not in metrics and c not in sds]
     problems = []
+    factors: dict[str, float] = {}
+    for name, unit in header:
+        base = name.removesuffix(SD_SUFFIX) if name in sds else name
+        metric = METRICS.get(base.partition(":")[0]) if base in metrics else None
+        try:
+            factors[name] = to_si(unit, metric.unit if metric else None)
+        except ValueError as exc:
+            problems.append(f"{path}: column {name} [{unit}]: {exc}")
     if not metrics:
         problems.append(f"{path}: no metric column; metric names: {', '.join(METRICS)}")
     problems += check_metrics(metrics, f"{path}: column")
@@ -144,15 +181,17 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     )
     rows: list[dict[str, Any]] = []
     for k, (i, record) in enumerate(table):
-        rows.append({c: parse_value(record[c]) for c in conditions})
+        rows.append({c: _condition(record[c], factors.get(c, 1.0)) for c in conditions})
         for j, m in enumerate(metrics):
-            values[k, j] = _finite(record[m])
+            values[k, j] = _finite(record[m]) * factors.get(m, 1.0)
             if not math.isfinite(values[k, j]):
                 problems.append(
                     f"{path}: line {i}, column {m}: not a finite number ({record[m]!r})"
                 )
+            elif reason := _out_of_bounds(m, values[k, j]):
+                problems.append(f"{path}: line {i}, column {m}: {reason}")
             if f"{m}{SD_SUFFIX}" in record:
-                sd[k, j] = _finite(record[f"{m}{SD_SUFFIX}"])
+                sd[k, j] = _finite(record[f"{m}{SD_SUFFIX}"]) * factors.get(f"{m}{SD_SUFFIX}", 1.0)
                 if not sd[k, j] > 0:  # NaN (not a finite number) fails too
                     problems.append(
                         f"{path}: line {i}, column {m}{SD_SUFFIX}: must be a finite number > 0 "
@@ -182,8 +221,11 @@ class Model:
     directory: Path
     client: Client
     function: Callable[[Job], dict[str, Any]] = run_job
+    progress: Callable[[str], None] | None = None
     runs: int = 0
     cache: dict[tuple[float, ...], np.ndarray] = field(default_factory=dict)
+    best: tuple[float, tuple[float, ...]] = (math.inf, ())
+    """The smallest sum of squared residuals evaluated so far, and its vector."""
 
     def jobs(self, theta: np.ndarray) -> list[Job]:
         """The runs of one vector: one per data row."""
@@ -214,6 +256,15 @@ class Model:
         for key, js in jobs.items():
             self.cache[key] = np.array(
                 [[_value(rows[j.key], m) for m in self.data.metrics] for j in js]
+            )
+            rss = float(np.sum(self.residuals(self.cache[key]) ** 2))
+            self.best = min(self.best, (rss, key))
+        if self.progress is not None and jobs:
+            rss, key = self.best
+            values = ", ".join(f"{f.key} = {v:.6g}" for f, v in zip(self.fits, key, strict=True))
+            self.progress(
+                f"calibrate: {self.runs} runs, {len(self.cache)} parameter vectors; best so far "
+                f"{values} (sum of squared residuals {rss:.4g})"
             )
         return np.stack([self.cache[tuple(map(float, t))] for t in thetas])
 
@@ -390,9 +441,12 @@ def calibrate(
     scheduler: str | None = None,
     workers: int | None = None,
     function: Callable[[Job], dict[str, Any]] = run_job,
+    progress: Callable[[str], None] | None = None,
 ) -> Calibration:
     """Fit ``fits`` (``KEY=LO:HI``) of ``case`` to ``data_path``; writes best.toml and fit.json
-    into ``directory`` and returns the calibration (module doc)."""
+    (with the provenance: the data file's and the case file's SHA-256, the method, perga's
+    version) into ``directory`` and returns the calibration (module doc); ``progress`` is told
+    the runs so far and the best vector after each batch."""
     keys = [parse_fit(f) for f in fits]
     for k in keys:
         try:
@@ -402,7 +456,7 @@ def calibrate(
     data = load_data(data_path, case, keys)
     directory.mkdir(parents=True, exist_ok=True)
     with dask_client(client, scheduler, workers) as c:
-        model = Model(case, data, keys, directory, c, function)
+        model = Model(case, data, keys, directory, c, function, progress)
         x0 = np.array([0.5 * (k.low + k.high) for k in keys])
         fit = least_squares(model, x0)
         if method == "bayes":
@@ -417,6 +471,12 @@ def calibrate(
         "measured": data.values.tolist(),
         "simulated": simulated.tolist(),
         "interval": "95 %: ±t(0.975, n − p)·se (least squares), posterior 2.5-97.5 % (bayes)",
+        "provenance": {
+            "data_sha256": hashlib.sha256(Path(data_path).read_bytes()).hexdigest(),
+            "case_sha256": hashlib.sha256(Path(case).read_bytes()).hexdigest(),
+            "method": method,
+            "perga": __version__,
+        },
     }
     (directory / "fit.json").write_text(json.dumps(record, indent=2, default=float) + "\n")
     return Calibration(fit, data, simulated)

@@ -8,7 +8,7 @@ design = "grid"                         # grid | lhs | sobol
 samples = 16                            # points of an lhs or sobol design
 replicates = 2                          # runs per point, each with its own seed
 seed = 0                                # seeds the design and the replicates' seeds
-metrics = ["first_impact_restitution", "first_impact_rebound_angle"]
+metrics = ["first_impact_restitution", "first_impact_rebound_angle_centre"]
 
 [parameters]
 "granules.placement.angle" = { values = [0.2, 0.6, 1.0, 1.3] }
