@@ -295,18 +295,41 @@ class RandomPlacement(Strict):
 
 
 class ShotPlacement(Strict):
-    """[granules.placement] kind = "shot": one granule fired at the leading face of hammer 0,
-    the scene of a rebound test (calibration of restitution and friction). The face is the
-    hammer outline's edge of largest y in the hammer's frame (a plate's y = width/2), facing the
-    direction of rotation; the granule's path meets it at ``along`` and its tangential
-    component points outward along the hammer's axis."""
+    """[granules.placement] kind = "shot": one granule fired at a face, the scene of a rebound
+    test (calibration of restitution and friction). ``target = "hammer"``: the leading face of
+    hammer 0, the hammer outline's edge of largest y in the hammer's frame (a plate's
+    y = width/2), facing the direction of rotation; the path meets it at ``along`` and its
+    tangential component points outward along the hammer's axis. ``target = "wall"``: the
+    chamber wall's flat edge that the ray from the axis at the angle ``at`` meets (its
+    material the chamber's), met there; the tangential component points counter-clockwise."""
 
     kind: Literal["shot"]
     speed: float = Field(
         ge=1e-3, le=200, description="speed relative to the face, m/s, in [1e-3, 200]"
     )
+    target: Literal["hammer", "wall"] = Field(
+        "hammer",
+        description="what the granule is fired at: 'hammer' (hammer 0's leading "
+        "face) or 'wall' (a flat edge of the chamber wall, in the chamber's material)",
+    )
+    at: float | None = Field(
+        None,
+        ge=-7,
+        le=7,
+        description="target = 'wall': the direction from the axis of the "
+        "point aimed at on the wall, rad, in [-7, 7]; default 0",
+    )
     angle: float = Field(
-        0.0, ge=0, le=1.5, description="angle of incidence from the face's normal, rad, in [0, 1.5]"
+        0.0,
+        ge=0,
+        le=1.5708,
+        description="angle of the path, rad: of incidence from the face's "
+        "normal, in [0, 1.5], or (angle_from = 'surface') from the face, in [0.0708, 1.5708]",
+    )
+    angle_from: Literal["normal", "surface"] = Field(
+        "normal",
+        description="what angle is measured from: the face's normal (incidence, as "
+        "most rebound tests report it) or its surface (grazing angle)",
     )
     spin: float = Field(
         0.0, ge=-1e5, le=1e5, description="initial angular velocity, rad/s (counter-clockwise > 0)"
@@ -320,6 +343,26 @@ class ShotPlacement(Strict):
     gap: float = Field(
         0.001, ge=1e-6, le=0.1, description="distance the granule flies before it touches, m"
     )
+
+    @model_validator(mode="after")
+    def _aim(self) -> ShotPlacement:
+        if self.incidence > 1.5:
+            raise ValueError(
+                f"angle = {self.angle} rad from the surface is an incidence of "
+                f"{self.incidence:.4g} rad from the normal: at most 1.5 (angle >= 0.0708)"
+            )
+        if self.target == "wall" and self.along is not None:
+            raise ValueError("along places a shot on a hammer face; a wall shot aims with at")
+        if self.target == "hammer" and self.at is not None:
+            raise ValueError(
+                "at aims a shot at the wall (target = 'wall'); a hammer shot uses along"
+            )
+        return self
+
+    @property
+    def incidence(self) -> float:
+        """The angle of incidence from the face's normal, rad."""
+        return self.angle if self.angle_from == "normal" else math.pi / 2 - self.angle
 
 
 class CombPlacement(Strict):

@@ -24,14 +24,13 @@ from perga.case.schema import Case, CombPlacement, ContactPair
 from perga.geometry.polygon import vertex_tuples
 from perga.model import checks
 from perga.model.hammer_geometry import hammer_geometry
-from perga.model.parts import chamber_geometry, hammer_angles, rotor_geometry
+from perga.model.parts import chamber_spec, hammer_angles, rotor_geometry
 from perga.model.placement import PlacementError, comb, held, initial_spins, initial_state
 from perga.model.plan import StepPlan, contact_plan, pair_stiffness, step_plan, tangential_ratio
 from perga.model.process import DamageSpec, FeedSpec, OutletSpec, ProcessSpec, Sizes
 from perga.model.sizes import initial_radii, masses, mean_mass, quantile_table
 from perga.model.system import (
     AirDragSpec,
-    ChamberSpec,
     ContactSpec,
     DrawingSpec,
     DriveSpec,
@@ -141,13 +140,6 @@ def _rotor(case: Case) -> RotorSpec:
     if disc is None:
         return RotorSpec(case.rotor.angular_velocity, case.rotor.radius)
     return RotorSpec(case.rotor.angular_velocity, disc.radius, vertex_tuples(disc.outline))
-
-
-def _chamber(case: Case) -> ChamberSpec:
-    c, g = case.chamber, chamber_geometry(case)
-    assert c is not None and g is not None
-    outline = None if g.outline is None else vertex_tuples(g.outline)
-    return ChamberSpec(g.inner_radius, c.wall_thickness, c.material, outline=outline)
 
 
 def _drawing(case: Case) -> DrawingSpec | None:
@@ -356,7 +348,7 @@ def _system(case: Case, placement: Placement, plan: StepPlan) -> System:
         iterations=case.solver.iterations,
         gravity=gravity,
         granule_collisions=case.effects.granule_collisions is not None,
-        chamber=_chamber(case),
+        chamber=chamber_spec(case),
         effects=_effects(case),
         contact_model=_contact_model(case),
         drawing=_drawing(case),

@@ -18,11 +18,12 @@ import numpy as np
 from perga.case.schema import Case, PartFile
 from perga.geometry.mass import load_mesh
 from perga.geometry.outline import read_outline
-from perga.geometry.polygon import FloatArray, contains
+from perga.geometry.polygon import FloatArray, contains, vertex_tuples
 from perga.geometry.properties import area_properties
 from perga.geometry.section import Section, section_mesh
 from perga.geometry.units import GeometryError
 from perga.model.hammer_geometry import MESH_SUFFIXES, resolve_path
+from perga.model.system import ChamberSpec
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,14 @@ def chamber_geometry(case: Case) -> ChamberGeometry | None:
         assert chamber.radius is not None
         return ChamberGeometry(None, chamber.radius, chamber.radius, "round")
     return _chamber_file(str(resolve_path(case.source_dir, chamber.shape)), chamber.shape)
+
+
+def chamber_spec(case: Case) -> ChamberSpec:
+    """The chamber of ``case`` as the system has it (a case with a chamber)."""
+    c, g = case.chamber, chamber_geometry(case)
+    assert c is not None and g is not None
+    outline = None if g.outline is None else vertex_tuples(g.outline)
+    return ChamberSpec(g.inner_radius, c.wall_thickness, c.material, outline=outline)
 
 
 @lru_cache(maxsize=16)

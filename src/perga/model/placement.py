@@ -6,6 +6,7 @@ Pure numpy, no Pymunk: the cross-checks and the mapping to the system share it.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +22,7 @@ from perga.case.schema import (
 from perga.geometry.clearance import Obstacles
 from perga.model.hammer_geometry import hammer_geometry
 from perga.model.obstacles import initial_obstacles
-from perga.model.parts import hammer_angles
+from perga.model.parts import chamber_spec, hammer_angles
 from perga.model.sizes import initial_radii
 
 FloatArray = NDArray[np.float64]
@@ -120,11 +121,22 @@ def face(case: Case) -> tuple[float, float, float]:
     return float(on_face[:, 0].min()), float(on_face[:, 0].max()), y
 
 
-def shot(case: Case, placement: ShotPlacement) -> tuple[FloatArray, FloatArray]:
-    """(position, velocity), (1, 2) each, SI, of a granule fired at hammer 0's leading face
-    (:class:`~perga.case.schema.ShotPlacement`): its path d = −cos θ n + sin θ a (n the face's
-    outward normal, a the hammer's axis, θ the angle of incidence) meets the face at ``along``
-    after ``gap``, and its velocity is the face's there (ω × r) plus ``speed``·d."""
+class ShotFace(NamedTuple):
+    """The face a shot is fired at, fixed frame, SI: the point its path meets, the face's
+    unit normal n (towards the granule) and tangent a, and the face's velocity there."""
+
+    point: FloatArray
+    normal: FloatArray
+    tangent: FloatArray
+    velocity: FloatArray
+
+
+def shot_face(case: Case, placement: ShotPlacement) -> ShotFace:
+    """The face of ``placement`` at t = 0 (:class:`~perga.case.schema.ShotPlacement`): hammer
+    0's leading face (a the hammer's axis, the face turning with the rotor), or the chamber
+    wall's edge that the ray from the axis at ``at`` meets (a counter-clockwise, at rest)."""
+    if placement.target == "wall":
+        return _wall_face(case, 0.0 if placement.at is None else placement.at)
     x0, x1, y = face(case)
     along = 0.5 * (x0 + x1) if placement.along is None else placement.along
     phi = hammer_angles(case)[0]
@@ -132,12 +144,43 @@ def shot(case: Case, placement: ShotPlacement) -> tuple[FloatArray, FloatArray]:
     hinge = case.hammers.hinge_radius * np.array([math.cos(phi), math.sin(phi)])
     a = np.array([math.cos(axis_angle), math.sin(axis_angle)])
     n = np.array([-a[1], a[0]])
-    target = hinge + along * a + y * n
-    d = -math.cos(placement.angle) * n + math.sin(placement.angle) * a
-    centre = target + case.granules.radius * n - d * placement.gap / math.cos(placement.angle)
+    point = hinge + along * a + y * n
     omega = case.rotor.angular_velocity
-    face_velocity = omega * np.array([-target[1], target[0]])
-    return centre[None, :], (face_velocity + placement.speed * d)[None, :]
+    return ShotFace(point, n, a, omega * np.array([-point[1], point[0]]))
+
+
+def _wall_face(case: Case, at: float) -> ShotFace:
+    """The chamber's inner edge met by the ray from the axis at angle ``at`` (rad), nearest
+    first; its inward normal and counter-clockwise tangent."""
+    if case.chamber is None:
+        raise PlacementError("granules.placement: target = 'wall' needs a [chamber]")
+    outline = chamber_spec(case).inner_outline()  # counter-clockwise
+    ray = np.array([math.cos(at), math.sin(at)])
+    best = None
+    for p, q in zip(outline, np.roll(outline, -1, axis=0), strict=True):
+        edge = q - p
+        denominator = ray[0] * edge[1] - ray[1] * edge[0]
+        if denominator == 0:
+            continue
+        t = (p[0] * edge[1] - p[1] * edge[0]) / denominator  # along the ray
+        u = (p[0] * ray[1] - p[1] * ray[0]) / denominator  # along the edge
+        if t > 0 and 0 <= u <= 1 and (best is None or t < best[0]):
+            best = (t, edge / np.hypot(*edge))
+    if best is None:
+        raise PlacementError(f"granules.placement: no wall edge meets the ray at {at} rad")
+    t, a = best
+    return ShotFace(t * ray, np.array([-a[1], a[0]]), a, np.zeros(2))
+
+
+def shot(case: Case, placement: ShotPlacement) -> tuple[FloatArray, FloatArray]:
+    """(position, velocity), (1, 2) each, SI, of a granule fired at its face
+    (:func:`shot_face`): its path d = −cos θ n + sin θ a (θ the angle of incidence) meets the
+    face after ``gap``, and its velocity is the face's there plus ``speed``·d."""
+    f = shot_face(case, placement)
+    theta = placement.incidence
+    d = -math.cos(theta) * f.normal + math.sin(theta) * f.tangent
+    centre = f.point + case.granules.radius * f.normal - d * placement.gap / math.cos(theta)
+    return centre[None, :], (f.velocity + placement.speed * d)[None, :]
 
 
 def held(case: Case) -> bool:

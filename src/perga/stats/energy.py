@@ -44,7 +44,9 @@ class ImpactStats:
     normal, rad."""
     tangential_restitution_centre: float
     """β_c = −u_t'/u_t of the granule's centre, u_t = v_t + ω r its tangential velocity relative
-    to the hammer's material point at the contact, - (nan head-on, or without the spins)."""
+    to the hammer's material point at the contact, - (nan head-on, or without the spins). A
+    rigid contact's point lies half its overlap δ inside the rim, so a spinning granule's u_t
+    is off by ω δ/2 (:func:`perga.stats.metrics.shot_rebound` reads a shot's centre itself)."""
     rebound_angle_centre: float
     """atan2(u_t', v_n'): the centre's relative velocity after the impact from the normal, rad
     (nan without the spins)."""

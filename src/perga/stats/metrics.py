@@ -32,7 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from perga.stats.energy import impact_stats
+from perga.case.schema import ShotPlacement
+from perga.model.placement import shot_face
+from perga.stats.energy import HEAD_ON, impact_stats
 from perga.stats.tables import FloatArray, Run, read_table
 
 
@@ -128,6 +130,91 @@ def first_impact_rebound_angle_centre(run: Run, _: float | None = None) -> float
 def first_impact_rebound_speed(run: Run, _: float | None = None) -> float:
     """|(v_n', v_t')|: the relative speed after granule 0's first impact, m/s."""
     return _first(run, "rebound_speed", "a rebound speed")
+
+
+@dataclass(frozen=True)
+class ShotRebound:
+    """A shot's velocities relative to its face at the start and at the end of the run, along
+    the face's normal n and its tangent t = n turned +90° (the impact log's), m/s: of the centre
+    and of the contact point (the centre's less the rim's ω r)."""
+
+    normal: tuple[float, float]
+    centre: tuple[float, float]
+    contact: tuple[float, float]
+
+
+def shot_rebound(run: Run) -> ShotRebound:
+    """The rebound of the shot of ``run`` from its trajectory (granules.csv), as a rebound test
+    measures it: the first frame's velocity and spin against the last frame's, relative to the
+    face's velocity at the point aimed at (a wall at rest; a hammer face at t = 0). The flight
+    must be free (no floor, drag or gravity in the plane) and over (the last two frames' velocity
+    the same)."""
+    case = run.case
+    placement = case.granules.placement
+    if not isinstance(placement, ShotPlacement):
+        raise MetricUnavailableError("the case's granule is not a shot (granules.placement)")
+    e = case.effects
+    if e.floor_friction is not None or e.air_drag is not None or e.gravity_in_plane is not None:
+        raise MetricUnavailableError(
+            "the shot's flight is not free: floor friction, drag or gravity change its velocity"
+        )
+    track = run.track(0)
+    if not track or track["time"].size < 3:
+        raise MetricUnavailableError("the run did not record granules.csv (three frames at least)")
+    v = np.column_stack((track["vx"], track["vy"]))
+    if not np.allclose(v[-1], v[-2], rtol=1e-9, atol=0.0) or np.allclose(v[-1], v[0], rtol=1e-9):
+        raise MetricUnavailableError(
+            "the shot has not rebounded by the run's end (its last two frames' velocities "
+            "differ, or equal its start's): run it longer"
+        )
+    face = shot_face(case, placement)
+    n = face.normal
+    t = np.array([-n[1], n[0]])
+    r = float(track["radius"][0]) if "radius" in track else case.granules.radius
+    u0, u1 = v[0] - face.velocity, v[-1] - face.velocity
+    w0, w1 = (float(track["angular_velocity"][i]) for i in (0, -1))
+    centre = (float(u0 @ t), float(u1 @ t))
+    return ShotRebound(
+        (float(u0 @ n), float(u1 @ n)), centre, (centre[0] - w0 * r, centre[1] - w1 * r)
+    )
+
+
+def _shot(run: Run, what: str, point: str) -> float:
+    """Restitution (e), tangential restitution (β) or rebound angle of the shot at ``point``."""
+    rebound = shot_rebound(run)
+    (vn, vn1), (vt, vt1) = rebound.normal, getattr(rebound, point)
+    if what == "restitution":
+        return -vn1 / vn
+    if what == "angle":
+        return math.atan2(vt1, vn1)
+    if abs(vt) <= HEAD_ON * abs(vn):
+        raise MetricUnavailableError("a head-on shot has no tangential motion")
+    return -vt1 / vt
+
+
+def shot_restitution(run: Run, _: float | None = None) -> float:
+    """e = −v_n'/v_n of the shot, from its trajectory."""
+    return _shot(run, "restitution", "centre")
+
+
+def shot_tangential_restitution_centre(run: Run, _: float | None = None) -> float:
+    """β = −u_t'/u_t of the shot's centre, from its trajectory."""
+    return _shot(run, "beta", "centre")
+
+
+def shot_tangential_restitution_contact(run: Run, _: float | None = None) -> float:
+    """β = −v_t'/v_t of the shot's contact point, from its trajectory and spin."""
+    return _shot(run, "beta", "contact")
+
+
+def shot_rebound_angle_centre(run: Run, _: float | None = None) -> float:
+    """atan2(u_t', v_n') of the shot's centre, rad."""
+    return _shot(run, "angle", "centre")
+
+
+def shot_rebound_angle_contact(run: Run, _: float | None = None) -> float:
+    """atan2(v_t', v_n') of the shot's contact point, rad."""
+    return _shot(run, "angle", "contact")
 
 
 def granule_speed_after_impact(run: Run, n: float | None) -> float:
@@ -295,6 +382,25 @@ METRICS: dict[str, Metric] = {
                convention="from the normal, the sign of the incidence's tangential velocity"),
         Metric("first_impact_rebound_speed", "m/s",
                "relative speed after the first impact of granule 0", first_impact_rebound_speed),
+        Metric("shot_restitution", "-", "e of the shot (hammer face or wall) from its trajectory",
+               shot_restitution, bounds=(0.0, 1.0),
+               convention="the normal rebound over the approach, both positive"),
+        Metric("shot_tangential_restitution_centre", "-",
+               "β = −u_t'/u_t of the shot's centre, from its trajectory",
+               shot_tangential_restitution_centre, bounds=(-1.0, 0.0),
+               convention="−1: the centre keeps its tangential velocity (a shot without spin)"),
+        Metric("shot_tangential_restitution_contact", "-",
+               "β = −v_t'/v_t of the shot's contact point, from its trajectory and spin",
+               shot_tangential_restitution_contact, bounds=(-1.0, 1.0),
+               convention="−1: the slip kept; 0: stopped; > 0: reversed"),
+        Metric("shot_rebound_angle_centre", "rad",
+               "atan2(u_t', v_n'): the shot's centre's rebound from the normal",
+               shot_rebound_angle_centre, bounds=(-math.pi / 2, math.pi / 2),
+               convention="from the normal, the sign of the incidence's tangential velocity"),
+        Metric("shot_rebound_angle_contact", "rad",
+               "atan2(v_t', v_n'): the shot's contact point's rebound from the normal",
+               shot_rebound_angle_contact, bounds=(-math.pi / 2, math.pi / 2),
+               convention="from the normal, the sign of the incidence's tangential velocity"),
         Metric("granule_speed_after_impact", "m/s",
                "speed of granule 0 in the fixed frame after its n-th impact",
                granule_speed_after_impact, argument="n, the impact number (1, 2, ...)"),
