@@ -1,7 +1,8 @@
 """Every free flight between two hammer contacts against the flight over the floor
 (perga.stats.flight_law): a hand-built table whose flights are the closed form's own (a
 stationary floor: a straight line slowed at f g; errors are rounding), each regime on both
-sides of its limit, and the README's separator, whose floor turns with the rotor."""
+sides of its limit (a real run's flights: tests/stats/test_slide_law.py, the welded
+separator)."""
 
 from pathlib import Path
 
@@ -9,10 +10,9 @@ import numpy as np
 import pytest
 
 from perga.case import load_case
-from perga.cli import main
-from perga.stats.flight_law import FREE, check_flights, summarise_flights
+from perga.stats.flight_law import FREE, check_flights
 from perga.stats.slide_law import SLIDE_STEPS
-from perga.stats.tables import Run, load_run
+from perga.stats.tables import Run
 from perga.stats.trajectory import free_flight
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -79,21 +79,6 @@ def test_a_hand_built_table_gives_the_known_answers() -> None:
         "the granule was held in the comb",
         FREE,
     ]
-
-
-def test_the_main_run_flies_as_the_model(tmp_path: Path) -> None:
-    """The README's separator (0.5 s, dt 4e-5 s): measured 768 flights between contacts, 262
-    free, velocity before the next impact within 3.9e-5 of the flight over the turning floor
-    (median 2.3e-6), position within 2.6e-4 of the path. The bound, 1e-4, is the floor's kick
-    split from the contacts' step: about μ g dt / v = 3.4 · 4e-5 / 3 ≈ 5e-5 per flight."""
-    run = tmp_path / "run"
-    sets = ["--set", 'output.record=["granules", "impacts", "energy"]']
-    assert main(["run", str(ROOT / "cases" / "separator.toml"), "-o", str(run), "--quiet",
-                 *sets]) == 0  # fmt: skip
-    summary = summarise_flights(check_flights(load_run(run)))
-    assert len(summary.free) > 200
-    assert max(c.velocity_error for c in summary.free) < 1e-4
-    assert max(c.position_error for c in summary.free) < 1e-3
 
 
 def test_soft_runs_are_refused_with_their_reason() -> None:
