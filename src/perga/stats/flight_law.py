@@ -23,6 +23,7 @@ import numpy as np
 
 from perga.analytic.floor_flight import FloorFlight
 from perga.model.compile import compile_case
+from perga.stats.episodes import in_words, median_and_largest
 from perga.stats.slide_law import contact_time
 from perga.stats.tables import Run
 
@@ -141,7 +142,7 @@ class FlightSummary:
     @property
     def others(self) -> str:
         """The regimes but ``FREE`` in words, most frequent first."""
-        return "; ".join(f"{n} {why}" for why, n in self.regimes.most_common()) or "none"
+        return in_words(self.regimes)
 
     def worst(self, count: int) -> list[FlightCheck]:
         """The ``count`` free flights with the largest velocity errors, largest first."""
@@ -149,14 +150,14 @@ class FlightSummary:
 
     def statistics(self) -> dict[str, dict[str, float]]:
         """Median and largest error of the free flights' velocity and position at their end."""
-        out = {}
-        for name, values in (
-            ("velocity before the next impact", [c.velocity_error for c in self.free]),
-            ("position at the next contact (over the path)", [c.position_error for c in self.free]),
-        ):
-            if values:
-                out[name] = {"median": float(np.median(values)), "max": float(np.max(values))}
-        return out
+        return median_and_largest(
+            {
+                "velocity before the next impact": [c.velocity_error for c in self.free],
+                "position at the next contact (over the path)": [
+                    c.position_error for c in self.free
+                ],
+            }
+        )
 
 
 def summarise_flights(checks: list[FlightCheck]) -> FlightSummary:

@@ -29,6 +29,7 @@ from perga.analytic.coupled_impact import (
 )
 from perga.model.compile import compile_case
 from perga.model.system import HammerSpec
+from perga.stats.episodes import in_words
 from perga.stats.tables import Run
 
 ISOLATED = "isolated"
@@ -194,7 +195,7 @@ class ImpactSummary:
     @property
     def others(self) -> str:
         """The regimes but ``ISOLATED`` in words, most frequent first."""
-        return "; ".join(f"{n} {why}" for why, n in self.regimes.most_common()) or "none"
+        return in_words(self.regimes)
 
     def worst(self, count: int) -> list[ImpactCheck]:
         """The ``count`` compared impacts with the largest velocity errors, largest first."""

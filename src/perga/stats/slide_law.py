@@ -29,6 +29,7 @@ import numpy as np
 
 from perga.analytic.disc_on_face import DiscOnFace
 from perga.analytic.sliding import BladeSlide, Face, FloorMode
+from perga.stats.episodes import in_words, median_and_largest
 from perga.stats.tables import Run
 
 ON_FACE = "on a face turning with the rotor"
@@ -240,7 +241,7 @@ class SlideSummary:
     @property
     def others(self) -> str:
         """The regimes but ``ON_FACE`` in words, most frequent first."""
-        return "; ".join(f"{n} {why}" for why, n in self.regimes.most_common()) or "none"
+        return in_words(self.regimes)
 
     def worst(self, count: int) -> list[SlideCheck]:
         """The ``count`` compared slides with the largest velocity errors, largest first."""
@@ -251,20 +252,16 @@ class SlideSummary:
         """Median and largest error of each statistic over ``checks`` (default: the slides on
         a face turning with the rotor)."""
         chosen = self.on_face if checks is None else checks
-        columns = {
-            "velocity at the end (over its speed)": [c.velocity_error for c in chosen],
-            "position along the face (over the travel)": [c.position_error for c in chosen],
-            "spin at the end (rim speed, over the velocity)": [c.spin_error for c in chosen],
-            "speed at the end (relative)": [
-                abs(c.exit_speed[0] / c.exit_speed[1] - 1) for c in chosen
-            ],
-        }
-        out = {}
-        for name, values in columns.items():
-            errors = np.array([v for v in values if math.isfinite(v)])
-            if errors.size:
-                out[name] = {"median": float(np.median(errors)), "max": float(errors.max())}
-        return out
+        return median_and_largest(
+            {
+                "velocity at the end (over its speed)": [c.velocity_error for c in chosen],
+                "position along the face (over the travel)": [c.position_error for c in chosen],
+                "spin at the end (rim speed, over the velocity)": [c.spin_error for c in chosen],
+                "speed at the end (relative)": [
+                    abs(c.exit_speed[0] / c.exit_speed[1] - 1) for c in chosen
+                ],
+            }
+        )
 
 
 def summarise_slides(checks: list[SlideCheck]) -> SlideSummary:

@@ -325,9 +325,9 @@ def _successive_row(run: Run, a: Analysis, isolated: list[ImpactCheck]) -> None:
     for c in isolated:
         by_granule.setdefault(c.granule, []).append(c)
     ratios = np.array([
-        u_n[b.index] ** 2 / (e * u_n[a_.index]) ** 2
+        u_n[second.index] ** 2 / (e * u_n[first.index]) ** 2
         for impacts in by_granule.values()
-        for a_, b in pairwise(sorted(impacts, key=lambda c: c.time))
+        for first, second in pairwise(sorted(impacts, key=lambda c: c.time))
     ])  # fmt: skip
     if not ratios.size:
         a.cannot(run, "successive impacts against the paper's e^{2i}",
