@@ -54,12 +54,14 @@ def test_first_impact_metrics_equal_the_impulse_law(tmp_path: Path, angle: float
     assert beta == pytest.approx(-exact.slip_after / exact.slip_before, abs=2e-3)
     rebound = evaluate(run, "first_impact_rebound_angle_contact")
     normal_after = exact.normal_velocity
-    assert rebound == pytest.approx(math.atan2(-exact.slip_after, normal_after), abs=2e-3)
+    # rebound angles are forward-positive: on the side the slip (centre: velocity) had before
+    forward = math.copysign(exact.slip_after, exact.slip_after * exact.slip_before)
+    assert rebound == pytest.approx(math.atan2(forward, normal_after), abs=2e-3)
     # the centre: its own tangential velocity, v sin θ before
     centre = evaluate(run, "first_impact_tangential_restitution_centre")
     assert centre == pytest.approx(-exact.tangential_velocity / (v * math.sin(angle)), abs=2e-3)
     rebound = evaluate(run, "first_impact_rebound_angle_centre")
-    assert rebound == pytest.approx(math.atan2(-exact.tangential_velocity, normal_after), abs=2e-3)
+    assert rebound == pytest.approx(math.atan2(exact.tangential_velocity, normal_after), abs=2e-3)
     for name in ("first_impact_tangential_restitution_centre",
                  "first_impact_tangential_restitution_contact"):  # fmt: skip
         low, high = METRICS[name].bounds
@@ -143,8 +145,8 @@ def test_a_wall_shot_rebounds_as_the_impulse_law(tmp_path: Path, angle: float) -
     beta = evaluate(run, "shot_tangential_restitution_centre")
     assert beta == pytest.approx(-exact.tangential_velocity / (v * math.sin(angle)), abs=2e-3)
     rebound = evaluate(run, "shot_rebound_angle_centre")
-    # the wall's tangent is counter-clockwise (+y on +x) and t = n turned +90° is −y: signs flip
-    assert rebound == pytest.approx(math.atan2(-exact.tangential_velocity,
+    # forward-positive, whichever way the wall's tangent runs
+    assert rebound == pytest.approx(math.atan2(exact.tangential_velocity,
                                                exact.normal_velocity), abs=2e-3)  # fmt: skip
 
 

@@ -80,13 +80,21 @@ def test_a_unit_must_be_known_and_of_the_metric_s_dimension(tmp_path, unit, acce
         ("first_impact_restitution", 1.01, "another unit"),
         ("first_impact_restitution", 0.0, None),
         ("first_impact_restitution", -0.5, "negate the column"),
+        ("shot_rebound_angle_centre", 0.0, None),
+        ("shot_rebound_angle_centre", 1.5, None),
+        ("shot_rebound_angle_centre", -0.3, "negate the column"),
+        ("shot_rebound_angle_centre", 1.6, "another unit"),
+        ("shot_rebound_angle_contact", -0.3, None),
+        ("shot_rebound_angle_contact", -1.6, "another unit"),
     ],
 )
 def test_values_outside_a_metric_s_bounds_are_refused_with_the_remedy(
     tmp_path, metric, value, remedy
 ) -> None:
     """β at the centre lies in [−1, 0] for a granule without spin before (a ratio u_t'/u_t,
-    the other sign convention, is refused with the hint to negate it); e in [0, 1]."""
+    the other sign convention, is refused with the hint to negate it); e in [0, 1]; the
+    centre's rebound angle forward-positive in [0, π/2] (one measured backward is refused), the
+    contact point's in [−π/2, π/2] (its slip may reverse)."""
     rows = [f"{a!r},{value!r}" for a in ANGLES]
     if remedy is None:
         assert _load(tmp_path, f"granules.placement.angle,{metric}", rows).values[0, 0] == value

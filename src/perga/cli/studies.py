@@ -121,6 +121,7 @@ def calibrate(args: argparse.Namespace) -> int:
             args.output,
             method=args.method,
             steps=args.steps,
+            runs=args.runs,
             scheduler=args.scheduler,
             workers=args.workers,
             progress=None if args.quiet else lambda line: print(line, file=sys.stderr),
@@ -229,8 +230,17 @@ def add_parsers(add: AddParser) -> None:
         metavar="KEY=LO:HI",
         help="a case key to fit and its bounds",
     )
-    parser.add_argument("--method", choices=("least-squares", "bayes"), default="least-squares")
+    parser.add_argument(
+        "--method",
+        choices=("least-squares", "bayes", "surrogate", "two-fidelity"),
+        default="least-squares",
+        help="least-squares (default); bayes: emcee over runs; surrogate: the posterior on "
+        "Gaussian-process surrogates; two-fidelity: on the analytical model corrected by a GP",
+    )
     parser.add_argument("--steps", type=int, default=100, help="bayes: emcee steps")
+    parser.add_argument(
+        "--runs", type=int, default=100, help="surrogate, two-fidelity: most runs (default 100)"
+    )
     parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
     parser.add_argument("--workers", type=int, help="local worker processes")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")

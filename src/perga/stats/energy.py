@@ -40,16 +40,16 @@ class ImpactStats:
     tangential_restitution: float
     """β = −v_t'/v_t of the contact point, - (nan for a head-on impact, |v_t| <= HEAD_ON·|v_n|)."""
     rebound_angle: float
-    """atan2(v_t', v_n'): the contact point's relative velocity after the impact from the
-    normal, rad."""
+    """The contact point's relative velocity after the impact from the normal, atan2(±v_t',
+    v_n'), positive on the side v_t had before (forward), rad."""
     tangential_restitution_centre: float
     """β_c = −u_t'/u_t of the granule's centre, u_t = v_t + ω r its tangential velocity relative
     to the hammer's material point at the contact, - (nan head-on, or without the spins). A
     rigid contact's point lies half its overlap δ inside the rim, so a spinning granule's u_t
     is off by ω δ/2 (:func:`perga.stats.metrics.shot_rebound` reads a shot's centre itself)."""
     rebound_angle_centre: float
-    """atan2(u_t', v_n'): the centre's relative velocity after the impact from the normal, rad
-    (nan without the spins)."""
+    """The centre's relative velocity after the impact from the normal, atan2(±u_t', v_n'),
+    positive on the side u_t had before (forward), rad (nan without the spins)."""
     rebound_speed: float
     """|(v_n', v_t')|, the relative speed after the impact, m/s."""
     reduced_mass: float
@@ -110,6 +110,14 @@ def granule_energy(run: Run, granule: int, t: float, before: bool = True) -> flo
     )
 
 
+def rebound_angle(tangential: float, tangential_after: float, normal_after: float) -> float:
+    """The rebound's angle from the normal, rad: atan2 of the tangential velocity after and the
+    normal one, positive on the side the tangential velocity had before (forward: a rebound
+    test's convention; friction alone never turns a centre without spin back)."""
+    forward = tangential_after if tangential >= 0.0 else -tangential_after
+    return math.atan2(forward, normal_after)
+
+
 def _ratio(a: float, b: float) -> float:
     """a/b, nan where b is 0 (a ratio the impact does not define)."""
     return a / b if b != 0.0 else math.nan
@@ -135,9 +143,9 @@ def impact_stats(run: Run, index: int) -> ImpactStats:
         approach_speed=-vn,
         restitution=_ratio(-vn1, vn),
         tangential_restitution=_ratio(-vt1, vt) if abs(vt) > HEAD_ON * abs(vn) else math.nan,
-        rebound_angle=math.atan2(vt1, vn1),
+        rebound_angle=rebound_angle(vt, vt1, vn1),
         tangential_restitution_centre=_ratio(-ut1, ut) if abs(ut) > HEAD_ON * abs(vn) else math.nan,
-        rebound_angle_centre=math.atan2(ut1, vn1),
+        rebound_angle_centre=rebound_angle(ut, ut1, vn1),
         rebound_speed=math.hypot(vn1, vt1),
         reduced_mass=mu,
         normal_loss=1 - _ratio(vn1, vn) ** 2,

@@ -19,7 +19,8 @@ angle are given at two points, as experiments report one or the other: at the gr
 centre report, e.g. Kharaz, Gorham & Salman 2001) and at the **contact point** (``_contact``:
 v_t, the slip, what tests that also measure the spin report, e.g. Foerster et al. 1994).
 β = −v'/v (−1: the tangential velocity kept, as in frictionless sliding; 0: stopped); the
-rebound angle is atan2(tangential', v_n'), rad, the velocity after from the normal. Each metric
+rebound angle is the velocity after from the normal, rad, positive forward (on the side the
+tangential velocity had before), as rebound tests report it. Each metric
 states its convention and, where the physics bounds it, the range a measured value must lie in
 (:class:`Metric`); ``perga metrics`` lists them.
 """
@@ -34,7 +35,7 @@ import numpy as np
 
 from perga.case.schema import ShotPlacement
 from perga.model.placement import shot_face
-from perga.stats.energy import HEAD_ON, impact_stats
+from perga.stats.energy import HEAD_ON, impact_stats, rebound_angle
 from perga.stats.tables import FloatArray, Run, read_table
 
 
@@ -118,12 +119,12 @@ def first_impact_tangential_restitution_centre(run: Run, _: float | None = None)
 
 
 def first_impact_rebound_angle_contact(run: Run, _: float | None = None) -> float:
-    """atan2(v_t', v_n') of the contact point, granule 0's first impact, rad."""
+    """The contact point's rebound angle, forward, granule 0's first impact, rad."""
     return _first(run, "rebound_angle", "a rebound angle")
 
 
 def first_impact_rebound_angle_centre(run: Run, _: float | None = None) -> float:
-    """atan2(u_t', v_n') of the centre, granule 0's first impact, rad."""
+    """The centre's rebound angle, forward, granule 0's first impact, rad."""
     return _first(run, "rebound_angle_centre", "a rebound angle (an older run without spins)")
 
 
@@ -186,7 +187,7 @@ def _shot(run: Run, what: str, point: str) -> float:
     if what == "restitution":
         return -vn1 / vn
     if what == "angle":
-        return math.atan2(vt1, vn1)
+        return rebound_angle(vt, vt1, vn1)
     if abs(vt) <= HEAD_ON * abs(vn):
         raise MetricUnavailableError("a head-on shot has no tangential motion")
     return -vt1 / vt
@@ -208,12 +209,12 @@ def shot_tangential_restitution_contact(run: Run, _: float | None = None) -> flo
 
 
 def shot_rebound_angle_centre(run: Run, _: float | None = None) -> float:
-    """atan2(u_t', v_n') of the shot's centre, rad."""
+    """The shot's centre's rebound angle, forward, rad."""
     return _shot(run, "angle", "centre")
 
 
 def shot_rebound_angle_contact(run: Run, _: float | None = None) -> float:
-    """atan2(v_t', v_n') of the shot's contact point, rad."""
+    """The shot's contact point's rebound angle, forward, rad."""
     return _shot(run, "angle", "contact")
 
 
@@ -372,14 +373,16 @@ METRICS: dict[str, Metric] = {
                convention="−1: the slip kept; 0: stopped (sticking); > 0: reversed by a "
                "tangential spring"),
         Metric("first_impact_rebound_angle_centre", "rad",
-               "atan2(u_t', v_n'): the centre's rebound from the normal, first impact of "
-               "granule 0", first_impact_rebound_angle_centre, bounds=(-math.pi / 2, math.pi / 2),
-               convention="from the normal, the sign of the incidence's tangential velocity"),
+               "the centre's rebound from the normal, atan2(u_t', v_n') forward, first "
+               "impact of granule 0", first_impact_rebound_angle_centre, bounds=(0.0, math.pi / 2),
+               convention="from the normal, positive forward (on the side the tangential "
+               "velocity had before): a granule without spin is never turned back"),
         Metric("first_impact_rebound_angle_contact", "rad",
-               "atan2(v_t', v_n'): the contact point's rebound from the normal, first impact of "
-               "granule 0", first_impact_rebound_angle_contact,
+               "the contact point's rebound from the normal, atan2(v_t', v_n') forward, "
+               "first impact of granule 0", first_impact_rebound_angle_contact,
                bounds=(-math.pi / 2, math.pi / 2),
-               convention="from the normal, the sign of the incidence's tangential velocity"),
+               convention="from the normal, positive forward (on the side the slip had "
+               "before), negative where the slip reversed"),
         Metric("first_impact_rebound_speed", "m/s",
                "relative speed after the first impact of granule 0", first_impact_rebound_speed),
         Metric("shot_restitution", "-", "e of the shot (hammer face or wall) from its trajectory",
@@ -394,13 +397,15 @@ METRICS: dict[str, Metric] = {
                shot_tangential_restitution_contact, bounds=(-1.0, 1.0),
                convention="−1: the slip kept; 0: stopped; > 0: reversed"),
         Metric("shot_rebound_angle_centre", "rad",
-               "atan2(u_t', v_n'): the shot's centre's rebound from the normal",
-               shot_rebound_angle_centre, bounds=(-math.pi / 2, math.pi / 2),
-               convention="from the normal, the sign of the incidence's tangential velocity"),
+               "the shot's centre's rebound from the normal, atan2(u_t', v_n') forward",
+               shot_rebound_angle_centre, bounds=(0.0, math.pi / 2),
+               convention="from the normal, positive forward (on the side the tangential "
+               "velocity had before): a granule without spin is never turned back"),
         Metric("shot_rebound_angle_contact", "rad",
-               "atan2(v_t', v_n'): the shot's contact point's rebound from the normal",
+               "the shot's contact point's rebound from the normal, atan2(v_t', v_n') forward",
                shot_rebound_angle_contact, bounds=(-math.pi / 2, math.pi / 2),
-               convention="from the normal, the sign of the incidence's tangential velocity"),
+               convention="from the normal, positive forward (on the side the slip had "
+               "before), negative where the slip reversed"),
         Metric("granule_speed_after_impact", "m/s",
                "speed of granule 0 in the fixed frame after its n-th impact",
                granule_speed_after_impact, argument="n, the impact number (1, 2, ...)"),

@@ -7,7 +7,7 @@ keys that differ per row, e.g. ``granules.placement.angle``) and metric names
 deviation. Each row is simulated with its conditions and the fitted keys' values; the residuals
 are (simulated − measured)/sd (sd = 1 where none is given).
 
-Two methods:
+Four methods:
 
 * ``least-squares``: ``scipy.optimize.least_squares`` (trust-region reflective, within the
   bounds) with a forward-difference Jacobian whose runs go to the cluster in one batch. The
@@ -19,6 +19,11 @@ Two methods:
   noise is the least-squares estimate s, stated in fit.json), started around the least-squares
   optimum; each step's walkers run as one batch. The 95 % intervals are the posterior's 2.5 and
   97.5 percentiles. docs/calibration.md says why emcee.
+
+* ``surrogate`` and ``two-fidelity``: the posterior from at most ``runs`` runs, sampled on
+  Gaussian-process surrogates of the metrics refined where the posterior lies; the second
+  corrects the analytical model (a shot's oblique-impact law) with a GP discrepancy
+  (:mod:`perga.studies.surrogate`).
 
 Runs of an evaluation are study runs like any other (keyed by their resolved case), so an
 interrupted calibration resumes where it stopped and repeated points cost nothing.
@@ -44,10 +49,12 @@ from perga import __version__
 from perga.case.load import overridden, read_case_data
 from perga.case.overrides import OverrideError, parse_value, split_override
 from perga.stats.metrics import METRICS
+from perga.studies.analytic_metrics import NoAnalyticModelError, analytic_model
 from perga.studies.column_units import split_unit, to_si
 from perga.studies.executor import dask_client, execute
 from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
 from perga.studies.study_file import StudyError, check_keys, check_metrics
+from perga.studies.surrogate import Round, minimum_runs, surrogate_posterior
 
 SD_SUFFIX = "_sd"
 
@@ -292,7 +299,9 @@ class Fit:
     intervals: list[tuple[float, float]]
     residuals: list[list[float]]
     rss: float
-    noise: float | None
+    noise: float | list[float] | None
+    """Without sd columns, the data's noise: the least-squares estimate s, or (surrogate) the
+    posterior median of each metric's σ; None when every value has its sd."""
     evaluations: int
     runs: int
     band: list[list[list[float]]]
@@ -429,6 +438,10 @@ class Calibration:
     simulated: np.ndarray
 
 
+METHODS = ("least-squares", "bayes", "surrogate", "two-fidelity")
+"""The calibration methods (module doc)."""
+
+
 def calibrate(
     case: Path,
     data_path: Path,
@@ -437,6 +450,7 @@ def calibrate(
     *,
     method: str = "least-squares",
     steps: int = 100,
+    runs: int = 100,
     client: Client | None = None,
     scheduler: str | None = None,
     workers: int | None = None,
@@ -455,12 +469,32 @@ def calibrate(
             raise StudyError([str(exc)]) from None
     data = load_data(data_path, case, keys)
     directory.mkdir(parents=True, exist_ok=True)
+    if method in ("surrogate", "two-fidelity") and runs < minimum_runs(len(keys), len(data.values)):
+        need = minimum_runs(len(keys), len(data.values))
+        raise StudyError(
+            [
+                f"--runs {runs}: the {method} method needs at least {need} runs ({len(keys)} "
+                f"+ 2 parameter vectors, each a run per data row of {data.path}: "
+                f"{len(data.values)})"
+            ]
+        )
+    cheap = None
+    if method == "two-fidelity":
+        try:
+            cheap = analytic_model(
+                case, data.conditions, data.metrics, {k.key: k.low for k in keys}
+            )
+        except NoAnalyticModelError as exc:
+            raise StudyError([f"--method two-fidelity: {exc}"]) from None
+    rounds: list[Round] = []
     with dask_client(client, scheduler, workers) as c:
         model = Model(case, data, keys, directory, c, function, progress)
-        x0 = np.array([0.5 * (k.low + k.high) for k in keys])
-        fit = least_squares(model, x0)
-        if method == "bayes":
-            fit = bayes(model, fit, steps=steps)
+        if method in ("surrogate", "two-fidelity"):
+            fit, rounds = surrogate_posterior(model, runs, cheap)
+        else:
+            fit = least_squares(model, np.array([0.5 * (k.low + k.high) for k in keys]))
+            if method == "bayes":
+                fit = bayes(model, fit, steps=steps)
         simulated = model.evaluate(np.array(fit.values)[None, :])[0]
     (directory / "best.toml").write_text(best_case(case, fit), encoding="utf-8")
     record = fit.as_dict() | {
@@ -470,7 +504,8 @@ def calibrate(
         "conditions": data.conditions,
         "measured": data.values.tolist(),
         "simulated": simulated.tolist(),
-        "interval": "95 %: ±t(0.975, n − p)·se (least squares), posterior 2.5-97.5 % (bayes)",
+        "interval": "95 %: ±t(0.975, n − p)·se (least squares), posterior 2.5-97.5 % (the others)",
+        "rounds": [r.__dict__ for r in rounds],
         "provenance": {
             "data_sha256": hashlib.sha256(Path(data_path).read_bytes()).hexdigest(),
             "case_sha256": hashlib.sha256(Path(case).read_bytes()).hexdigest(),
