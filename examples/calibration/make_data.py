@@ -1,12 +1,19 @@
-"""Make the synthetic rebound-test data of examples/calibration/measured.csv.
+"""Make the synthetic data of the calibration examples from perga runs at stated true values.
 
-Stated true values: restitution e = 0.72 and friction f = 0.28 between bee bread and steel.
-The granule of cases/rebound-test.toml is fired at 5 m/s at seven angles of incidence,
-0.2-1.4 rad; each shot's normal restitution and tangential restitution come from a perga run at
-the true values (perga.stats.metrics), plus Gaussian noise of the stated standard deviations
-(0.01 and 0.02), seeded: the same file every time.
+* ``rebound`` -> measured.csv: restitution e = 0.72 and friction f = 0.28 between bee bread and
+  steel; the granule of cases/rebound-test.toml fired at 5 m/s at seven angles of incidence,
+  0.2-1.4 rad; each shot's normal restitution and tangential restitution at the contact point
+  plus Gaussian noise of the stated standard deviations (0.01 and 0.02), seeded.
+* ``struck`` -> struck.csv: e = 0.7; the granule of cases/single-granule.toml struck by its
+  hinged hammer at 300-1200 rpm; its speed after the first impact plus noise of sd 0.05 m/s.
+* ``separator`` -> separator.csv: the bundled separator's contacts (cases/separator.toml: bee
+  bread on steel e = 0.7, f = 0.35, on bee bread e = 0.6, f = 0.5), its first 0.2 s run with
+  four seeds of the data's own (not the calibration's seed): each metric's mean over them and
+  its standard error, as a measurement repeated on as many fillings would give it.
 
-    python examples/calibration/make_data.py [-o measured.csv] [--workers N]
+Seeded: the same files every time.
+
+    python examples/calibration/make_data.py [rebound|struck|separator] [--workers N]
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ from __future__ import annotations
 import argparse
 import csv
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -22,34 +30,86 @@ from perga.studies.study_file import Parameter, Study
 from perga.studies.sweep import sweep
 
 HERE = Path(__file__).resolve().parent
-CASE = HERE.parents[1] / "cases" / "rebound-test.toml"
-TRUE = {"contacts.granule-hammer.restitution": 0.72, "contacts.granule-hammer.friction": 0.28}
-ANGLES = [0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4]
-NOISE = {"first_impact_restitution": 0.01, "first_impact_tangential_restitution_contact": 0.02}
+CASES = HERE.parents[1] / "cases"
 SEED = 2026
+"""The noise's and the replicates' seeds derive from this one; calibrations run with seed 0's."""
+
+
+@dataclass(frozen=True)
+class Example:
+    """Runs at ``truth`` over a ``condition`` key's values; each metric with its noise sd
+    (None: the replicates' standard error instead)."""
+
+    case: Path
+    output: str
+    truth: dict[str, float]
+    condition: tuple[str, list[float]]
+    noise: dict[str, float | None]
+    replicates: int = 1
+    fixed: dict[str, float] = field(default_factory=dict)
+
+
+EXAMPLES = {
+    "rebound": Example(
+        CASES / "rebound-test.toml", "measured.csv",
+        {"contacts.granule-hammer.restitution": 0.72, "contacts.granule-hammer.friction": 0.28},
+        ("granules.placement.angle", [0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4]),
+        {"first_impact_restitution": 0.01, "first_impact_tangential_restitution_contact": 0.02},
+    ),
+    "struck": Example(
+        CASES / "single-granule.toml", "struck.csv",
+        {"contacts.granule-hammer.restitution": 0.7},
+        ("rotor.rpm", [300.0, 600.0, 900.0, 1200.0]),
+        {"granule_speed_after_impact:1": 0.05},
+        fixed={"solver.duration": 0.06},
+    ),
+    "separator": Example(
+        CASES / "separator.toml", "separator.csv",
+        {"contacts.beebread-steel.restitution": 0.7, "contacts.beebread-steel.friction": 0.35,
+         "contacts.beebread-beebread.restitution": 0.6,
+         "contacts.beebread-beebread.friction": 0.5},
+        ("solver.duration", [0.2]),
+        {"impact_count": None, "energy_gain_per_impact": None, "dissipated_fraction": None,
+         "mean_speed_at_end": None},
+        replicates=4,
+    ),
+}  # fmt: skip
+
+
+def write(example: Example, workers: int | None) -> Path:
+    """Run ``example`` at its truth and write its data file beside this script."""
+    key, values = example.condition
+    parameters = {k: Parameter(values=[v]) for k, v in {**example.truth, **example.fixed}.items()}
+    parameters[key] = Parameter(values=values)
+    study = Study(case=example.case, parameters=parameters, metrics=list(example.noise),
+                  replicates=example.replicates, seed=SEED)  # fmt: skip
+    with tempfile.TemporaryDirectory() as work:
+        rows = sweep(study, Path(work), workers=workers).rows
+    rng = np.random.default_rng(SEED)
+    path = HERE / example.output
+    with path.open("w", newline="", encoding="utf-8") as stream:
+        writer = csv.writer(stream)
+        writer.writerow([key, *(c for m in example.noise for c in (m, f"{m}_sd"))])
+        for value in values:
+            runs = [row for row in rows if row[key] == value]
+            cells: list[object] = [value]
+            for metric, sd in example.noise.items():
+                measured = np.array([row[metric] for row in runs])
+                if sd is None:
+                    error = measured.std(ddof=1) / np.sqrt(len(measured))
+                    cells += [f"{measured.mean():.6g}", f"{error:.6g}"]
+                else:
+                    cells += [f"{measured.mean() + rng.normal(0.0, sd):.6f}", sd]
+            writer.writerow(cells)
+    return path
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", type=Path, default=HERE / "measured.csv")
+    parser.add_argument("example", nargs="?", choices=list(EXAMPLES), default="rebound")
     parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    parameters = {k: Parameter(values=[v]) for k, v in TRUE.items()}
-    parameters["granules.placement.angle"] = Parameter(values=ANGLES)
-    study = Study(case=CASE, parameters=parameters, metrics=list(NOISE))
-    with tempfile.TemporaryDirectory() as work:
-        result = sweep(study, Path(work), workers=args.workers)
-    rng = np.random.default_rng(SEED)
-    rows = sorted(result.rows, key=lambda r: r["granules.placement.angle"])
-    with args.output.open("w", newline="", encoding="utf-8") as stream:
-        writer = csv.writer(stream)
-        writer.writerow(["granules.placement.angle", *(c for m in NOISE for c in (m, f"{m}_sd"))])
-        for row in rows:
-            cells = [row["granules.placement.angle"]]
-            for metric, sd in NOISE.items():
-                cells += [f"{row[metric] + rng.normal(0.0, sd):.6f}", sd]
-            writer.writerow(cells)
-    print(f"wrote {args.output} ({len(rows)} rows)")
+    print(f"wrote {write(EXAMPLES[args.example], args.workers)}")
     return 0
 
 

@@ -187,3 +187,14 @@ def test_a_shot_that_has_not_rebounded_says_so(tmp_path: Path) -> None:
     _, run = _shot(tmp_path, "granules.placement.angle=1.4", "solver.duration=0.0005")
     with pytest.raises(MetricUnavailableError, match="has not rebounded by the run's end"):
         evaluate(run, "shot_restitution")
+
+
+def test_the_ledger_s_metrics(tmp_path: Path) -> None:
+    """dissipated_fraction and mean_speed_at_end read summary.json: the contacts' dissipation
+    over the energy at the start and put in play, and the end speeds' mean (exactly)."""
+    _, run = _shot(tmp_path, "granules.placement.angle=0.8")
+    energy, speeds = run.summary["energy"], run.summary["speeds"]
+    total = energy["kinetic_initial"] + energy["elastic_initial"] + energy["energy_in_play"]
+    assert evaluate(run, "dissipated_fraction") == energy["contact_dissipation"] / total
+    assert 0.0 < evaluate(run, "dissipated_fraction") < 1.0
+    assert evaluate(run, "mean_speed_at_end") == speeds["mean"]

@@ -281,6 +281,28 @@ def ledger_closure(run: Run, _: float | None = None) -> float:
     return float(energy["closure"])
 
 
+def dissipated_fraction(run: Run, _: float | None = None) -> float:
+    """The energy the contacts dissipated (restitution and friction, summary.json's ledger)
+    over all the run had: the bodies' kinetic and elastic energy at the start and the energy
+    put in play since (the drive's work, gravity's, the inflow's), -."""
+    energy = run.summary.get("energy") or {}
+    if "contact_dissipation" not in energy:
+        raise MetricUnavailableError("the run did not track energy (output.record lacks 'energy')")
+    total = sum(float(energy[k] or 0.0) for k in ("kinetic_initial", "elastic_initial",
+                                                   "energy_in_play"))  # fmt: skip
+    if not total > 0.0:
+        raise MetricUnavailableError("the run had no energy to dissipate")
+    return float(energy["contact_dissipation"]) / total
+
+
+def mean_speed_at_end(run: Run, _: float | None = None) -> float:
+    """The granules' mean speed in the fixed frame at the run's end (summary.json), m/s."""
+    speeds = run.summary.get("speeds") or {}
+    if speeds.get("mean") is None:
+        raise MetricUnavailableError("the run ended without granules (no speeds in summary.json)")
+    return float(speeds["mean"])
+
+
 def _outflow(run: Run) -> dict[str, FloatArray]:
     """outflow.csv: each granule that left through the outlet (mass, kg; survival, -; ...)."""
     path = run.directory / "outflow.csv"
@@ -417,6 +439,13 @@ METRICS: dict[str, Metric] = {
         Metric("radius_at", "m", "distance of granule 0 from the axis at time t", radius_at,
                argument="t, s"),
         Metric("ledger_closure", "-", "energy-ledger closure at the end", ledger_closure),
+        Metric("dissipated_fraction", "-",
+               "energy dissipated in contacts over the energy at the start and put in play",
+               dissipated_fraction, bounds=(0.0, 1.0),
+               convention="a share of the energy in play: contacts only take energy"),
+        Metric("mean_speed_at_end", "m/s", "the granules' mean speed at the end",
+               mean_speed_at_end, bounds=(0.0, math.inf),
+               convention="a speed, never negative"),
         Metric("released_fraction", "-",
                "share of the granules held in comb cells at t = 0 released", released_fraction),
         Metric("damaged_fraction", "-",
