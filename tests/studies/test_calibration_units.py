@@ -103,3 +103,13 @@ def test_values_outside_a_metric_s_bounds_are_refused_with_the_remedy(
         _load(tmp_path, f"granules.placement.angle,{metric}", rows)
     message = str(refused.value)
     assert f"line 2, column {metric}: {value:.6g} is outside" in message and remedy in message
+
+
+def test_the_sd_of_a_metric_with_an_argument(tmp_path: Path) -> None:
+    """``NAME:ARG_sd`` is the sd of ``NAME:ARG`` (not a metric of argument ``ARG_sd``)."""
+    path = tmp_path / "struck.csv"
+    path.write_text(
+        "rotor.rpm,granule_speed_after_impact:1,granule_speed_after_impact:1_sd\n600,11.6,0.05\n"
+    )
+    data = load_data(path, ROOT / "cases" / "single-granule.toml", FITS)
+    assert data.metrics == ["granule_speed_after_impact:1"] and data.sd[0, 0] == 0.05

@@ -163,8 +163,9 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
             [f"{path}: line {i}: {len(columns)} cells expected, as in the header" for i in short]
         )
     table = [(i, dict(zip(columns, row, strict=True))) for i, row in lines]
-    metrics = [c for c in columns if c.partition(":")[0] in METRICS]
-    sds = [c for c in columns if c.endswith(SD_SUFFIX) and c[: -len(SD_SUFFIX)] in metrics]
+    sds = [c for c in columns if c.endswith(SD_SUFFIX) and c[: -len(SD_SUFFIX)] in columns]
+    metrics = [c for c in columns if c.partition(":")[0] in METRICS and c not in sds]
+    sds = [c for c in sds if c[: -len(SD_SUFFIX)] in metrics]
     conditions = [c for c in columns if c not in metrics and c not in sds]
     problems = []
     factors: dict[str, float] = {}
