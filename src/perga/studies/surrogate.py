@@ -96,13 +96,13 @@ class Gp:
 
 
 def _fit_gp(x: np.ndarray, values: np.ndarray, seed: int) -> Gp:
-    """Hyperparameters by maximum marginal likelihood (scikit-learn, three restarts)."""
+    """Hyperparameters by maximum marginal likelihood (scikit-learn, one restart)."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     offset, scale = float(values.mean()), float(values.std()) or 1.0
     y = (values - offset) / scale
-    gp = GaussianProcessRegressor(_kernel(x.shape[1]), n_restarts_optimizer=3, random_state=seed)
+    gp = GaussianProcessRegressor(_kernel(x.shape[1]), n_restarts_optimizer=1, random_state=seed)
     with warnings.catch_warnings():  # a length at its bound: the metric is flat along it
         warnings.simplefilter("ignore", ConvergenceWarning)
         kernel = gp.fit(x, y).kernel_
