@@ -13,7 +13,7 @@
 
 Seeded: the same files every time.
 
-    python examples/calibration/make_data.py [rebound|struck|separator] [--workers N]
+    python examples/calibration/make_data.py [rebound|struck|separator] [-o FILE] [--workers N]
 """
 
 from __future__ import annotations
@@ -76,8 +76,8 @@ EXAMPLES = {
 }  # fmt: skip
 
 
-def write(example: Example, workers: int | None) -> Path:
-    """Run ``example`` at its truth and write its data file beside this script."""
+def write(example: Example, path: Path, workers: int | None) -> Path:
+    """Run ``example`` at its truth and write its data file to ``path``."""
     key, values = example.condition
     parameters = {k: Parameter(values=[v]) for k, v in {**example.truth, **example.fixed}.items()}
     parameters[key] = Parameter(values=values)
@@ -86,7 +86,6 @@ def write(example: Example, workers: int | None) -> Path:
     with tempfile.TemporaryDirectory() as work:
         rows = sweep(study, Path(work), workers=workers).rows
     rng = np.random.default_rng(SEED)
-    path = HERE / example.output
     with path.open("w", newline="", encoding="utf-8") as stream:
         writer = csv.writer(stream)
         writer.writerow([key, *(c for m in example.noise for c in (m, f"{m}_sd"))])
@@ -107,9 +106,11 @@ def write(example: Example, workers: int | None) -> Path:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("example", nargs="?", choices=list(EXAMPLES), default="rebound")
+    parser.add_argument("-o", "--output", type=Path, help="default: the example's file here")
     parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    print(f"wrote {write(EXAMPLES[args.example], args.workers)}")
+    example = EXAMPLES[args.example]
+    print(f"wrote {write(example, args.output or HERE / example.output, args.workers)}")
     return 0
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -50,16 +51,34 @@ def _at(data: dict[str, Any], key: str) -> Any:
     return node
 
 
+def _set(data: dict[str, Any], key: str, value: Any) -> None:
+    """Set the value at a dotted key that exists (:func:`_at`)."""
+    *path, last = key.replace("[0]", ".0").split(".")
+    node: Any = data
+    for part in path:
+        node = node[0] if part == "0" else node[part]
+    node[last] = value
+
+
 def test_the_override_sets_give_the_case_data_of_the_text_edits() -> None:
-    """Every run, in the same order: the values the edits set (exact floats), then the whole
-    case data (its digest)."""
+    """Every run, in the same order: the values the edits set (exact, but for a float computed
+    by integrating an ODE, the blade's exit time in solver.duration: to 1e-9 relative, ten
+    times BladeSlide.integrate's rtol of 1e-10; its digits below that are scipy's and numpy's,
+    0.09667955078947306 against 0.09667955077830616, 1.2e-10 apart, with scipy 1.17), then
+    the whole case data with those floats as the edits had them (its digest)."""
     runs = paper_jobs(CASES)
     assert [r.name for r in runs] == list(TEXT_EDITS)
     for run in runs:
         data, old = _data(run), TEXT_EDITS[run.name]
-        assert {k: _at(data, k) for k in old if k != "sha256"} == {
-            k: v for k, v in old.items() if k != "sha256"
-        }, run.name
+        for key, value in old.items():
+            if key == "sha256":
+                continue
+            now = _at(data, key)
+            if key == "solver.duration" and run.name.startswith("blade-"):
+                assert math.isclose(now, value, rel_tol=1e-9, abs_tol=0.0), (run.name, now)
+                _set(data, key, value)
+            else:
+                assert now == value, (run.name, key)
         assert _digest(data) == old["sha256"], run.name
 
 

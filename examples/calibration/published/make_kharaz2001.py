@@ -8,7 +8,7 @@ e8a0d92f47910deaf2a20b1365aeb1af2adc2c5f). MFiX's comments say they were read of
 measured anew; the only changes are the sign of the tangential restitution (perga's
 beta = -u_t'/u_t) and, in the combined file, the pairing of the two figures' points (SOURCE.md).
 
-    python examples/calibration/published/make_kharaz2001.py          # write the CSVs
+    python examples/calibration/published/make_kharaz2001.py          # write the CSVs here
     python examples/calibration/published/make_kharaz2001.py --check  # and print the checks
 """
 
@@ -54,16 +54,16 @@ def _write(path: Path, header: list[str], rows: list[list[str]]) -> None:
     print(f"wrote {path.name} ({len(rows)} rows)")
 
 
-def write() -> None:
+def write(folder: Path) -> None:
     # Each figure with its own abscissae, exactly as transcribed.
     rebound = zip(REBOUND_INCIDENCE, REBOUND_ANGLE, strict=True)
     _write(
-        HERE / "kharaz2001_rebound_angle.csv",
+        folder / "kharaz2001_rebound_angle.csv",
         [ANGLE, THETA_R],
         [[f"{a:.4f}", f"{r:.4f}"] for a, r in rebound],
     )
     _write(
-        HERE / "kharaz2001_tangential_restitution.csv",
+        folder / "kharaz2001_tangential_restitution.csv",
         [ANGLE, BETA],
         [[f"{a:.4f}", f"{-e:.4f}"] for a, e in zip(COEFF_INCIDENCE, COEFF_ET, strict=True)],
     )
@@ -74,10 +74,10 @@ def write() -> None:
         REBOUND_INCIDENCE[1:], REBOUND_ANGLE[1:], COEFF_INCIDENCE, COEFF_ET, strict=True
     ):
         rows.append([f"{(a1 + a2) / 2:.2f}", f"{r:.4f}", f"{-e:.4f}"])
-    _write(HERE / "kharaz2001.csv", [ANGLE, THETA_R, BETA], rows)
+    _write(folder / "kharaz2001.csv", [ANGLE, THETA_R, BETA], rows)
     # The rows where a sphere slides throughout (above 30°, SOURCE.md): a rigid disc's too.
     sliding = [row for row in rows if float(row[0]) >= SLIDING]
-    _write(HERE / "kharaz2001_sliding.csv", [ANGLE, THETA_R, BETA], sliding)
+    _write(folder / "kharaz2001_sliding.csv", [ANGLE, THETA_R, BETA], sliding)
 
 
 def check() -> None:
@@ -116,7 +116,8 @@ def check() -> None:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="print the consistency checks")
+    parser.add_argument("-o", "--output", type=Path, default=HERE, help="folder (default: here)")
     args = parser.parse_args()
-    write()
+    write(args.output)
     if args.check:
         check()
