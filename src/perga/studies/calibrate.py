@@ -54,7 +54,12 @@ from perga.studies.column_units import split_unit, to_si
 from perga.studies.executor import dask_client, execute
 from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
 from perga.studies.study_file import StudyError, check_keys, check_metrics
-from perga.studies.surrogate import Round, minimum_runs, surrogate_posterior
+from perga.studies.surrogate import (
+    Round,
+    minimum_runs,
+    posterior_intervals,
+    surrogate_posterior,
+)
 
 SD_SUFFIX = "_sd"
 
@@ -408,7 +413,7 @@ def bayes(
         keys=start.keys,
         values=[float(v) for v in median],
         standard_errors=[float(s) for s in chain.std(axis=0)],
-        intervals=[(float(a), float(b)) for a, b in np.percentile(chain, [2.5, 97.5], axis=0).T],
+        intervals=posterior_intervals(chain),
         residuals=residuals.reshape(model.data.values.shape).tolist(),
         rss=float(residuals @ residuals),
         noise=None if model.data.weighted else noise,

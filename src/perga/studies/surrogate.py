@@ -194,8 +194,9 @@ def _log_posterior(
     within :func:`_noise_bounds`)."""
     keys = surrogate.low.size
     unknown = ~np.isfinite(sd).all(axis=0)
-    low = np.concatenate([surrogate.low, _noise_bounds(measured)[0][unknown]])
-    high = np.concatenate([surrogate.high, _noise_bounds(measured)[1][unknown]])
+    noise_low, noise_high = _noise_bounds(measured)
+    low = np.concatenate([surrogate.low, noise_low[unknown]])
+    high = np.concatenate([surrogate.high, noise_high[unknown]])
 
     def log_prob(points: np.ndarray) -> np.ndarray:
         inside = np.all((points >= low) & (points <= high), axis=1)
@@ -261,7 +262,8 @@ def _next_batch(
     return np.array(picks)
 
 
-def _intervals(samples: np.ndarray) -> list[tuple[float, float]]:
+def posterior_intervals(samples: np.ndarray) -> list[tuple[float, float]]:
+    """Each column's 95 % interval: its 2.5 and 97.5 percentiles."""
     return [(float(a), float(b)) for a, b in np.percentile(samples, [2.5, 97.5], axis=0).T]
 
 
@@ -301,7 +303,7 @@ def surrogate_posterior(
         surrogate = fit_surrogate(thetas, simulated, low, high, cheap, seed)
         best = thetas[int(np.argmin([np.sum(model.residuals(s) ** 2) for s in simulated]))]
         samples = sample_posterior(surrogate, measured, sd, best, seed)
-        rounds[-1].intervals = _intervals(samples[:, :keys])
+        rounds[-1].intervals = posterior_intervals(samples[:, :keys])
         noise = _noise(sd, samples, keys)
         size = min(batch, budget - len(thetas))
         if size <= 0 or (len(rounds) > 1 and rounds[-1].error <= tolerance):
@@ -324,7 +326,7 @@ def surrogate_posterior(
         keys=[f.key for f in model.fits],
         values=[float(v) for v in median],
         standard_errors=[float(s) for s in samples[:, :keys].std(axis=0)],
-        intervals=_intervals(samples[:, :keys]),
+        intervals=posterior_intervals(samples[:, :keys]),
         residuals=residuals.reshape(measured.shape).tolist(),
         rss=float(residuals @ residuals),
         noise=np.exp(np.median(samples[:, keys:], axis=0)).tolist() if unknown.any() else None,
