@@ -244,3 +244,11 @@ def test_the_struck_law_needs_its_scene() -> None:
 
     with pytest.raises(NoAnalyticModelError, match="one granule placed at rest"):
         analytic_model(CASE, [{}], ["granule_speed_after_impact:1"], {E: 0.5})
+
+
+@pytest.mark.parametrize("low", [0.0, 1.0, 1.5])
+def test_a_fitted_key_is_found_from_any_lower_bound(low: float) -> None:
+    """Which key is the pair's friction is found by moving it from its lower bound: the move
+    must change it whatever the bound (friction in [0, 2]; 1.0 was once moved to itself)."""
+    model = analytic_model(CASE, [{}], ["shot_tangential_restitution_centre"], {F: low})
+    assert model.scenes[0]["shot"].friction_key == 0

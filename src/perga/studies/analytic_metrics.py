@@ -134,7 +134,7 @@ def _pair_keys(case_path: Path, row: dict[str, Any], fitted: dict[str, float]) -
     e, f = _pair(load(fitted))
     keys: dict[str, int] = {}
     for i, (key, value) in enumerate(fitted.items()):
-        e1, f1 = _pair(load({**fitted, key: value + 0.5 * (1.0 - value)}))
+        e1, f1 = _pair(load({**fitted, key: value / 2 if value else 0.5}))  # in range, moved
         which = "e" if e1 != e else "f" if f1 != f else None
         if which is None:
             raise NoAnalyticModelError(
