@@ -369,7 +369,8 @@ class CombPlacement(Strict):
     """[granules.placement] kind = "comb": the granules sit in the cells of a comb piece, a
     hexagonal array of cells (rows of ``columns`` cells, every other row shifted by half a
     pitch) centred at ``centre`` and turned by ``angle``; a granule of a material with a
-    ``detachment_force`` is held in its cell until the force on it exceeds that."""
+    ``detachment_force`` is held in its cell until the force on it exceeds that, or with a
+    ``detachment_energy`` until a blow leaves it more than that energy."""
 
     kind: Literal["comb"]
     centre: tuple[float, float] = Field(description="centre of the comb piece, m")
@@ -512,9 +513,29 @@ class Material(Strict):
         ge=1e-9,
         le=1e4,
         description="force that pulls a granule of this material out of its "
-        "comb cell, N, in [1e-9, 1e4]; none: granules are not held",
+        "comb cell, N, in [1e-9, 1e4] (with detachment_energy: the force that begins a blow); "
+        "none: granules are not held",
+    )
+    detachment_energy: float | None = Field(
+        None,
+        ge=1e-9,
+        le=100.0,
+        description="energy a blow must leave in a granule of this material to pull it out of "
+        "its comb cell, J, in [1e-9, 100]: a force above detachment_force begins a blow, in "
+        "which the granule moves freely; after it the bond breaks if the granule's kinetic "
+        "energy exceeds this, and takes this much, else it stops the granule; none: the "
+        "granule goes as soon as the force exceeds detachment_force (at an impact a force set "
+        "by the contact's stiffness or the step)",
     )
     breakage: Breakage | None = Field(None, description="breakage parameters (damage)")
+
+    @model_validator(mode="after")
+    def _bond_whole(self) -> Material:
+        if self.detachment_energy is not None and self.detachment_force is None:
+            raise ValueError(
+                "detachment_energy needs a detachment_force (the force that begins a blow)"
+            )
+        return self
 
 
 class ContactPair(Strict):

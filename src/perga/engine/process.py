@@ -120,6 +120,7 @@ class Feed:
                 material=s.material,
                 rolls=s.rolls,
                 bond_force=s.bond_force,
+                bond_energy=s.bond_energy,
             )
             for p, r, m in zip(positions, radii, masses, strict=True)
         ]

@@ -65,12 +65,19 @@ def _hammers(case: Case) -> tuple[HammerSpec, ...]:
     )
 
 
+def _bond_energy(case: Case) -> float:
+    """The granules' material's detachment_energy, J (inf: none)."""
+    energy = case.materials[case.granules.material].detachment_energy
+    return math.inf if energy is None else energy
+
+
 def _granules(case: Case, placement: Placement) -> tuple[GranuleSpec, ...]:
     g = case.granules
     positions, velocities, radii = placement
     spins = initial_spins(case)
     weights = masses(case, radii)
     bond = case.materials[g.material].detachment_force if held(case) else None
+    bond_energy = _bond_energy(case)
     return tuple(
         GranuleSpec(
             position=(float(p[0]), float(p[1])),
@@ -81,6 +88,7 @@ def _granules(case: Case, placement: Placement) -> tuple[GranuleSpec, ...]:
             rolls=g.rolls,
             angular_velocity=float(w),
             bond_force=bond,
+            bond_energy=bond_energy,
         )
         for p, v, w, r, m in zip(positions, velocities, spins, radii, weights, strict=True)
     )
@@ -186,6 +194,7 @@ def _feed(case: Case) -> FeedSpec | None:
         material=g.material,
         rolls=g.rolls,
         bond_force=bond,
+        bond_energy=_bond_energy(case),
         seed=int(np.random.SeedSequence(case.solver.seed, spawn_key=(2,)).generate_state(1)[0]),
     )
 

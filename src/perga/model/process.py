@@ -45,7 +45,8 @@ class FeedSpec:
     m, m, rad) where it overlaps nothing, moving at ``velocity`` (m/s). A piece is the granules
     at ``piece`` (offsets from its centre, m; one at (0, 0) for single granules), of radii from
     ``sizes``, mass ``areal_density``·πr² (kg/m²·m²) or ``mass`` (kg) each, of ``material``,
-    held with ``bond_force`` (N, None: free); ``seed`` seeds the places and sizes."""
+    held with ``bond_force`` (N, None: free) and ``bond_energy`` (J, ``GranuleSpec``); ``seed``
+    seeds the places and sizes."""
 
     rate: float
     start: float
@@ -60,6 +61,7 @@ class FeedSpec:
     material: str
     rolls: bool
     bond_force: float | None
+    bond_energy: float
     seed: int
 
     def mass_of(self, radii: np.ndarray) -> np.ndarray:

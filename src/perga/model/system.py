@@ -183,7 +183,9 @@ class GranuleSpec:
     point that never changes its angular velocity; angular_velocity: initial, rad/s (a sliding
     granule on a rotor face should start with the rotor's ω so that its surface does not slip
     against the face, docs/pymunk.md); bond_force: held at its position (a comb's cell) until the
-    force the bond must supply exceeds this, N; None: free.
+    force the bond must supply exceeds this, N; None: free; bond_energy: with it, a force above
+    bond_force begins a blow, after which the bond breaks if the granule's kinetic energy
+    exceeds this, J, taking that much (``perga.contact.soft.kernel`` module doc); inf: none.
     """
 
     position: Vec2
@@ -194,11 +196,14 @@ class GranuleSpec:
     rolls: bool = True
     angular_velocity: float = 0.0
     bond_force: float | None = None
+    bond_energy: float = math.inf
 
     def __post_init__(self) -> None:
         problems: list[str] = []
         if self.bond_force is not None and not self.bond_force > 0:
             problems.append(f"bond_force must be > 0 N or None (got {self.bond_force})")
+        if not self.bond_energy > 0:
+            problems.append(f"bond_energy must be > 0 J (got {self.bond_energy})")
         _finite_vec(problems, "position", self.position)
         _finite_vec(problems, "velocity", self.velocity)
         _positive(problems, "radius", self.radius, "m")

@@ -13,17 +13,23 @@ moves the contacts of granules that do not roll onto their centres
 
 A held granule (a comb's cell: ``GranuleSpec.bond_force``) moves freely within a machine step,
 so that a hammer strikes a granule of its own mass; after the step its bond must supply the
-impulse m·|v| that brings it back to rest, a force m·|v|/dt. While that force is at most the
-bond's, the granule is set back at rest in its cell (for a static load such as gravity the
-force is the load itself, exactly); at the first step where it is larger the bond breaks, having
-taken the most it can, bond·dt, from the granule's momentum. The kinetic energy the bond takes is
-part of the contacts' dissipation (the cell is a contact).
+impulse m·|v| that brings it back to rest, a force F = m·|v|/dt. While F is at most the bond's
+force, the granule is set back at rest in its cell (for a static load such as gravity the force
+is the load itself, exactly). At the first step where it is larger, a bond without energy
+breaks, having taken the most it can, bond·dt, from the granule's momentum; a bond with an
+energy E_c (``GranuleSpec.bond_energy``) that can carry the granule's weight (m|g| at most its
+force) sees the step as a blow, over within the step (an
+impulse): if the granule's kinetic energy E (translation and spin) exceeds E_c the bond breaks
+and the granule goes on with its velocities scaled by √(1 − E_c/E), else the granule stops where
+it is, its new cell (as in the soft kernel, ``perga.contact.soft.kernel``). The kinetic energy
+the bonds take is part of the contacts' dissipation (the cell is a contact).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -45,6 +51,16 @@ from perga.model.system import GranuleSpec
 
 if TYPE_CHECKING:
     from perga.machine.compiled import CompiledMachine
+
+
+@dataclass
+class _Bond:
+    """A held granule's bond: its cell (internal units), force (N) and energy (J, inf: none;
+    module doc)."""
+
+    cell: FloatArray
+    force: float
+    energy: float
 
 
 class _Kinematics:
@@ -101,7 +117,7 @@ class RigidContacts:
             self.bodies.listen("pre_solve", sliding_point.hammer_contact, ("granule", "hammer"))
         if rolls == {True, False}:  # two sliding points need nothing (sliding_point)
             self.bodies.listen("pre_solve", sliding_point.granule_contact, ("granule", "granule"))
-        self._bonds: dict[int, tuple[FloatArray, float]] = {}
+        self._bonds: dict[int, _Bond] = {}
         self.log = (
             RigidImpactLog(self.bodies, self._bonds, rewritten=bool(outline) or sliding)
             if record_impacts
@@ -129,7 +145,7 @@ class RigidContacts:
             zip(spec.granules, self.bodies.granule_bodies, strict=True)
         ):
             if g.bond_force is not None:
-                self._hold(id_, body, g.bond_force)
+                self._hold(id_, body, g)
 
     # --- the protocol ------------------------------------------------------------------------
 
@@ -220,7 +236,7 @@ class RigidContacts:
         for g, id_ in zip(granules, ids, strict=True):
             body = self.bodies.add_granule(g, int(id_))
             if g.bond_force is not None:
-                self._hold(int(id_), body, g.bond_force)
+                self._hold(int(id_), body, g)
         new = list(granules)
         self.ids = np.append(self.ids, np.asarray(ids, dtype=np.int64))
         self.masses = np.append(self.masses, [g.mass for g in new])
@@ -282,13 +298,16 @@ class RigidContacts:
     def _gravity_work(self, state: GranuleState) -> float:
         return float(np.sum(self.masses * ((state.positions - self._x0) @ self._gravity)))
 
-    def _hold(self, id_: int, body: pymunk.Body, bond_force: float) -> None:
-        """Hold ``body`` in its cell where it is, with a bond of ``bond_force`` (N)."""
-        self._bonds[id_] = (np.array(body.position, dtype=float), bond_force)
+    def _hold(self, id_: int, body: pymunk.Body, granule: GranuleSpec) -> None:
+        """Hold ``body`` in its cell where it is, with the granule's bond."""
+        assert granule.bond_force is not None
+        self._bonds[id_] = _Bond(
+            np.array(body.position, dtype=float), granule.bond_force, granule.bond_energy
+        )
 
     def _hold_or_release(self, time: float) -> None:
-        """Set the held granules back at rest in their cells, or release those whose bond the
-        step overloaded (module doc); book the kinetic energy the bonds took.
+        """Set the held granules back at rest in their cells, or end the blows of those whose
+        bond the step overloaded (module doc); book the kinetic energy the bonds took.
 
         "At rest" is the velocity that brings a granule back to its cell over the next step,
         (cell − x)/dt (Chipmunk moves bodies before it applies gravity and impulses; 0 unless
@@ -300,27 +319,41 @@ class RigidContacts:
         assert x is not None
         held = np.fromiter(self._bonds, dtype=np.int64, count=len(self._bonds))
         rows = np.searchsorted(self.ids, held)  # ids stay ascending: appended, never reordered
-        cells = np.array([self._bonds[int(i)][0] for i in held]).reshape(-1, 2)
-        bonds = np.array([self._bonds[int(i)][1] for i in held])
+        records = [self._bonds[int(i)] for i in held]
+        cells = np.array([b.cell for b in records]).reshape(-1, 2)
+        bonds = np.array([b.force for b in records])
+        capacity = np.array([b.energy for b in records])
         mass = self.masses[rows]
         speed = np.hypot(*(v[rows] * u.VELOCITY).T)
+        spins = self._granule_reader().angular_velocities()[rows]
+        moments = self._moments[rows]
         force = mass * speed / self._dt
         kept = force <= bonds
+        energy = 0.5 * (mass * speed**2 + moments * spins**2)
+        blow = ~kept & np.isfinite(capacity) & (mass * np.hypot(*self._gravity) <= bonds)
+        broken = ~kept & ((energy > capacity) | ~blow)
+        stopped = blow & ~broken
+        share = np.ones(len(held))
+        forced = broken & ~blow
+        share[forced] = 1.0 - bonds[forced] * self._dt / np.maximum(mass * speed, 1e-300)[forced]
+        struck = broken & blow
+        share[struck] = np.sqrt(1.0 - capacity[struck] / energy[struck])
         rest = (cells - x[rows]) / (self._dt / u.TIME)
-        new = v[rows].copy()
+        new = v[rows] * share[:, None]
         new[kept] = rest[kept]
-        broken = ~kept
-        share = np.where(broken, 1.0 - bonds * self._dt / np.maximum(mass * speed, 1e-300), 1.0)
-        new[broken] = v[rows][broken] * share[broken, None]
-        before = 0.5 * mass * speed**2
-        after = 0.5 * mass * np.sum((new * u.VELOCITY) ** 2, axis=1)
-        self._bond_loss += float(np.sum(before - after))
+        new[stopped] = 0.0
+        spin_share = np.where(struck, share, np.where(broken, 1.0, 0.0))
+        after = 0.5 * (
+            mass * np.sum((new * u.VELOCITY) ** 2, axis=1) + moments * (spins * spin_share) ** 2
+        )
+        self._bond_loss += float(np.sum(energy - after))
         v[rows] = new
         writer.write_internal_velocities(v)
+        for i in np.flatnonzero(stopped):
+            records[i].cell = x[rows[i]].copy()
+        for i in np.flatnonzero(spins * (1.0 - spin_share) != 0.0):
+            body = self.bodies.granule_bodies[rows[i]]
+            body.angular_velocity = spins[i] * spin_share[i] / u.ANGULAR_VELOCITY
         for i in np.flatnonzero(broken):
             del self._bonds[int(held[i])]
             self.releases.append(Release(time, int(held[i]), float(force[i])))
-        spins = self._granule_reader().angular_velocities()[rows]
-        for i in np.flatnonzero(kept & (spins != 0.0) & (self._moments[rows] > 0.0)):
-            self._bond_loss += 0.5 * self._moments[rows[i]] * spins[i] ** 2
-            self.bodies.granule_bodies[rows[i]].angular_velocity = 0.0

@@ -111,4 +111,5 @@ def soft_granules(
         pairs=spec.granule_collisions,
         held=np.array([x.bond_force is not None for x in g], dtype=bool),
         bond_force=np.array([math.inf if x.bond_force is None else x.bond_force for x in g]),
+        bond_energy=np.array([x.bond_energy for x in g], dtype=float),
     )

@@ -132,9 +132,10 @@ class SoftGranules:
     pairs: False leaves granule-granule contacts out entirely (no neighbour list, no pair loop:
     granules pass through each other, as in a scene without granule collisions).
     held (n,) bool and bond_force (n,), N: granules held in the comb and the force that breaks
-    each one's bond (``kernel`` module doc); ``released_step`` (n,) is −1 until a granule is
-    released, then the number of the step that released it (``steps`` counts the steps taken),
-    ``release_force`` (n,) the force that did, N.
+    each one's bond, and bond_energy (n,), J, the energy it takes from a blow (inf: none;
+    ``kernel`` module doc); ``released_step`` (n,) is −1 until
+    a granule is released, then the number of the step that released it (``steps`` counts the
+    steps taken), ``release_force`` (n,) the load that did, N.
 
     The arrays are public and may be edited between ``step`` calls (call ``invalidate`` after
     moving granules by hand so the neighbour list is rebuilt). ``polygon_hist`` (n, n_poly,
@@ -170,6 +171,7 @@ class SoftGranules:
         pairs: bool = True,
         held=None,
         bond_force=None,
+        bond_energy=None,
     ) -> None:
         self.x = _f64(x, np.shape(x))
         n = self.x.shape[0]
@@ -211,6 +213,7 @@ class SoftGranules:
         self.counts = np.zeros(2, np.int64)
         self.held = np.zeros(n, np.int8) if held is None else _held(held, n)
         self.bond_force = np.full(n, math.inf) if bond_force is None else _f64(bond_force, (n,))
+        self.bond_energy = np.full(n, math.inf) if bond_energy is None else _f64(bond_energy, (n,))
         self.released_step = np.full(n, -1, np.int64)
         self.release_force = np.full(n, math.nan)
         self.steps = 0
@@ -328,14 +331,16 @@ class SoftGranules:
         return out
 
     _ROWS = (
-        "x", "v", "w", "r", "m", "inertia", "mat", "held", "bond_force", "released_step",
-        "release_force", "f", "tq", "a_prev", "x_ref", "wall_hist", "polygon_hist",
+        "x", "v", "w", "r", "m", "inertia", "mat", "held", "bond_force",
+        "bond_energy", "released_step", "release_force", "f", "tq", "a_prev", "x_ref", "wall_hist",
+        "polygon_hist",
     )  # fmt: skip
     """The per-granule arrays (first axis: granule), which ``add`` and ``remove`` resize."""
 
     def add(
-        self, x, r, m, *, mat, v=None, w=None, inertia=None, held=None, bond_force=None
-    ) -> None:
+        self, x, r, m, *, mat, v=None, w=None, inertia=None, held=None, bond_force=None,
+        bond_energy=None,
+    ) -> None:  # fmt: skip
         """Append granules (arguments as the constructor's, for the new granules only), at rest
         unless v, w are given; contacts and their histories between the others are kept."""
         x = np.asarray(x, dtype=float).reshape(-1, 2)
@@ -356,6 +361,9 @@ class SoftGranules:
             "mat": mat,
             "held": np.zeros(k, np.int8) if held is None else _held(held, k),
             "bond_force": np.full(k, math.inf) if bond_force is None else _f64(bond_force, (k,)),
+            "bond_energy": (
+                np.full(k, math.inf) if bond_energy is None else _f64(bond_energy, (k,))
+            ),
             "released_step": np.full(k, -1, np.int64),
             "release_force": np.full(k, math.nan),
             "f": np.zeros((k, 2)),
@@ -549,7 +557,13 @@ class SoftGranules:
             ),
             (self.x, self.v, self.w, self.a_prev),
             (self.r, self.m, self.inertia, self.mat),
-            (self.held, self.bond_force, self.released_step, self.release_force),
+            (
+                self.held,
+                self.bond_force,
+                self.bond_energy,
+                self.released_step,
+                self.release_force,
+            ),
             self.params,
             (self.walls, self.wall_hist),
             polygons,

@@ -7,8 +7,9 @@ which numba compiles as tuples with attribute access):
   accelerations a_prev (n, 3) = (a_x, a_y, α) of the last step;
 * ``GranuleProps``: radii r (n,), masses m (n,), moments of inertia about the centre (n,)
   (m r²/2 for a disc) and materials mat (n,) int32;
-* ``Bonds``: the comb's hold on each granule: held (n,) int8, bond_force (n,) N, and what
-  the kernel writes at a release, released_step (n,) int64 and release_force (n,) N;
+* ``Bonds``: the comb's hold on each granule: held (n,) int8, bond_force (n,) N,
+  bond_energy (n,) J, and what the kernel writes at a release, released_step (n,) int64 and
+  release_force (n,) N;
 * ``params``: the pair table (n_mat, n_mat, N_PARAMS) of ``perga.contact.soft.laws``;
 * ``Walls``: rows (n_walls, 6) and the tangential history hist (n, n_walls), below;
 * ``Polygons``: ``PolygonArrays``, ``TableArrays``, the contact history (n, n_poly,
@@ -24,10 +25,18 @@ which numba compiles as tuples with attribute access):
   handed over (``perga.machine.effects.FloorKick``) and the copy of the state after it that the
   impact log keeps (``perga.contact.soft.impacts``), each optional.
 
-Bonds (the comb, ``perga.model.process``): a held granule stays where it is, at rest, while the
-force its bond must take, |f + m g| (f the contact force of the step, g gravity), is at most its
-bond_force; in the first step where it is larger the bond breaks (held = 0, released_step the
-step's number, release_force that force) and the granule moves under that same force.
+Bonds (the comb, ``perga.model.process``): a held granule (held = 1) stays where it is, at rest,
+while the force its bond must take, F = |f + m g| (f the contact force of the step, g gravity),
+is at most its bond_force. In the first step where it is larger, with no bond_energy (inf), the
+bond breaks (held = 0, released_step the step's number, release_force F) and the granule moves
+under that force. With a bond_energy E_c the step begins a blow instead (held = 2,
+release_force F), unless the bond cannot carry the granule's weight (m|g| > bond_force: it
+breaks at once): the granule moves freely, of its own mass, until its contact force is zero
+again; then, if its kinetic energy E (translation and spin) exceeds E_c, the bond breaks and
+the granule goes on with its velocities scaled by √(1 − E_c/E) (the bond took E_c), else it
+stops where it is (held = 1) and the bond took E. Either way the bond's share is booked with
+the walls' dissipation (the cell is a contact). A blow's outcome is then the impact law's (the
+same free granule struck), whatever the contact's stiffness or the step.
 
 Walls: rows ``[kind, a, b, c, d, mat]``:
 
@@ -188,11 +197,13 @@ class GranuleProps(NamedTuple):
 
 
 class Bonds(NamedTuple):
-    """The comb's bonds (module doc): held (n,) int8 (1: held); bond_force (n,), N;
-    released_step (n,) int64 (−1 until released); release_force (n,), N (nan until released)."""
+    """The comb's bonds (module doc): held (n,) int8 (1: held, 2: in a blow); bond_force (n,),
+    N; bond_energy (n,), J (inf: none); released_step (n,) int64 (−1 until released);
+    release_force (n,), N (nan until released)."""
 
     held: np.ndarray
     bond_force: np.ndarray
+    bond_energy: np.ndarray
     released_step: np.ndarray
     release_force: np.ndarray
 
@@ -618,10 +629,20 @@ def _integrate_free(
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
+def _stop(i, v, w, a_prev):
+    """Granule i at rest, its last accelerations zero (held in its cell)."""
+    v[i, 0] = 0.0
+    v[i, 1] = 0.0
+    w[i] = 0.0
+    a_prev[i, 0] = 0.0
+    a_prev[i, 1] = 0.0
+    a_prev[i, 2] = 0.0
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
 def _integrate_range(
     lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, walls_near, acc, f, tq,
-    held, bond_force, released_step, release_force, poly, table, phist, rho, cstart, cpoly,
-    ploads, x_ref, scalars,
+    bonds, poly, table, phist, rho, cstart, cpoly, ploads, x_ref, scalars,
 ):  # fmt: skip
     """The per-granule pass of ``_integrate`` for granules lo:hi, from arrays (the bundles'
     fields, cand's), walls_near = (wall_gap (``wall_gaps``), flags, order, free) and scalars = (dt,
@@ -636,9 +657,12 @@ def _integrate_range(
     can reach a wall or a polygon or is held; order lists them) take the full path in index
     order, then every other granule only sums its pair forces and moves (``_integrate_free``).
     A granule's step reads and writes only its own state (and its candidate entries), so the
-    split gives the same floats."""
+    split gives the same floats. ``bonds`` is unpacked first: written through a named tuple's
+    fields inside ``_integrate``'s parallel loop, an array keeps none of the writes (numba
+    0.68)."""
     dt, damp, v_cap, step, reach, near, gravity, keep = scalars
     wall_gap, flags, order, free = walls_near
+    held, bond_force, bond_energy, released_step, release_force = bonds
     h = 0.5 * dt
     dmax = 0.0
     smax = 0.0
@@ -674,19 +698,34 @@ def _integrate_range(
             f[i, 0] = fx
             f[i, 1] = fy
             tq[i] = t
-        if held[i]:
+        if held[i] == 1:
             load = math.hypot(fx + m[i] * gravity[0], fy + m[i] * gravity[1])
             if load <= bond_force[i]:
-                v[i, 0] = 0.0
-                v[i, 1] = 0.0
-                w[i] = 0.0
-                a_prev[i, 0] = 0.0
-                a_prev[i, 1] = 0.0
-                a_prev[i, 2] = 0.0
+                _stop(i, v, w, a_prev)
                 continue
+            release_force[i] = load
+            weight = m[i] * math.hypot(gravity[0], gravity[1])
+            if bond_energy[i] == math.inf or weight > bond_force[i]:
+                held[i] = 0
+                released_step[i] = step
+                releases += 1
+            else:
+                held[i] = 2
+        elif held[i] == 2 and fx == 0.0 and fy == 0.0 and t == 0.0:
+            energy = 0.5 * (m[i] * (v[i, 0] ** 2 + v[i, 1] ** 2) + inertia[i] * w[i] ** 2)
+            if energy <= bond_energy[i]:
+                lost += energy
+                held[i] = 1
+                release_force[i] = math.nan
+                _stop(i, v, w, a_prev)
+                continue
+            lost += bond_energy[i]
+            share = math.sqrt(1.0 - bond_energy[i] / energy)
+            v[i, 0] *= share
+            v[i, 1] *= share
+            w[i] *= share
             held[i] = 0
             released_step[i] = step
-            release_force[i] = load
             releases += 1
         kick_drift_one(i, x, v, w, m, inertia, fx, fy, t, gravity, dt, damp, v_cap, a_prev)
         d2, s2, u2 = motion_of(i, x, v, a_prev, x_ref, h)
@@ -730,7 +769,6 @@ def _integrate(
     """
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
-    held, bond_force, released_step, release_force = bonds
     rows, wall_hist = walls.rows, walls.hist
     acc, f, tq = work.acc, work.f, work.tq
     cstart, cpoly, ploads = cand.start, cand.polygon, cand.loads
@@ -741,8 +779,8 @@ def _integrate(
     for c in prange(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, rows, wall_hist, walls_near, acc, f, tq, held, bond_force, released_step,
-            release_force, poly, table, phist, rho, cstart, cpoly, ploads, x_ref,
+            params, rows, wall_hist, walls_near, acc, f, tq, bonds, poly, table, phist, rho,
+            cstart, cpoly, ploads, x_ref,
             (dt, damp, v_cap, step, reach, near, gravity,
              step == settings.first_step + settings.n_steps - 1),
         )  # fmt: skip
@@ -762,15 +800,14 @@ def _integrate_serial(
     """``_integrate`` on one thread, chunk after chunk, without a parallel region."""
     x, v, w, a_prev = granules.x, granules.v, granules.w, granules.a_prev
     r, m, inertia, mat = props.r, props.m, props.inertia, props.mat
-    held, bond_force, released_step, release_force = bonds
     damp = 1.0 / (1.0 + settings.drag * settings.dt)
     n = x.shape[0]
     n_chunks = work.acc.shape[0]
     for c in range(n_chunks):
         dmax, smax, lost, umax, changes, releases = _integrate_range(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, walls.rows, walls.hist, walls_near, work.acc, work.f, work.tq, held,
-            bond_force, released_step, release_force, poly, table, phist, rho, cand.start,
+            params, walls.rows, walls.hist, walls_near, work.acc, work.f, work.tq, bonds, poly,
+            table, phist, rho, cand.start,
             cand.polygon, cand.loads, x_ref,
             (settings.dt, damp, settings.v_cap, step, reach, near, settings.gravity,
              step == settings.first_step + settings.n_steps - 1),

@@ -302,6 +302,7 @@ class SoftContacts:
             bond_force=np.array(
                 [math.inf if s.bond_force is None else s.bond_force for s in specs]
             ),
+            bond_energy=np.array([s.bond_energy for s in specs], dtype=float),
         )
         n = len(specs)
         self.ids = np.append(self.ids, np.asarray(ids, dtype=np.int64))
