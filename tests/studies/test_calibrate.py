@@ -7,9 +7,11 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+import math
 from pathlib import Path
 
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 
 from perga import __version__
@@ -71,6 +73,15 @@ def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> Non
     assert "best so far contacts.granule-hammer.restitution = " in said[-1]
     best = (out / "best.toml").read_text()
     assert f"restitution = {fit.values[0]!r}" in best
+    # the posterior sample perga window --posterior draws from: the linearised normal, within
+    # the bounds; its mean and sd those of the fit to 4 standard errors of a 4,000-draw sample
+    posterior = pq.read_table(out / "posterior.parquet").to_pydict()
+    assert list(posterior) == fit.keys
+    for key, value, se in zip(fit.keys, fit.values, fit.standard_errors, strict=True):
+        sample = np.array(posterior[key])
+        assert 3000 < sample.size <= 4000
+        assert abs(sample.mean() - value) < 4 * se / math.sqrt(sample.size)
+        assert sample.std() == pytest.approx(se, rel=4 * math.sqrt(0.5 / sample.size))
     # the figures draw the fit's numbers (issue 18, item 6): the measured points, the model at
     # the fit (in the abscissa's order) and each row's residual
     with data.open() as f:

@@ -15,6 +15,8 @@ from perga.cli import main
 from perga.stats.metrics import METRICS as REGISTRY
 from perga.stats.metrics import MetricUnavailableError, evaluate
 from perga.stats.tables import load_run
+from perga.studies.pareto import pareto_front
+from perga.studies.user_units import metric_label
 from perga.studies.window import (
     METRICS,
     RELEASE,
@@ -23,6 +25,7 @@ from perga.studies.window import (
     best_point,
     in_window,
     shortfall,
+    trade_offs,
     trend,
 )
 from tests.figure_data import saved_figures
@@ -309,10 +312,20 @@ def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
     table = pq.read_table(out / "window.parquet").to_pydict()
     for panel, metric in zip(saved["window.png"].axes, METRICS, strict=False):  # the maps' data
         mesh = next(c for c in panel.collections if hasattr(c, "get_array"))
-        means = np.array(table[f"{metric}_mean"])
+        means = np.array(table[f"{metric}_mean"]) * metric_label(metric)[1]  # the user's units
         assert np.array_equal(
             np.sort(mesh.get_array().compressed()), np.sort(means[~np.isnan(means)])
         )
+        assert panel.get_xlabel() == "rotor speed [rpm]" and panel.get_ylabel() == "hammer mass [g]"
+    rings = [line.get_xydata()[0] for line in saved["trade-offs.png"].axes[0].get_lines()]
+    front = [(t * 3600, d * 100) for t, d in zip(table["throughput_mean"],
+             table["damaged_fraction_mean"], strict=True)]  # fmt: skip
+    values = np.array([[table[f"{m}_mean"][i] for m in ("throughput", "damaged_fraction",
+                       "energy_per_kg")] for i in range(4)])  # fmt: skip
+    expected = pareto_front(values, ["max", "min", "min"])
+    assert sorted(map(tuple, np.round(rings, 9))) == sorted(
+        tuple(np.round(front[i], 9)) for i in expected
+    )
     points = sorted(zip(table["hammers.mass"], table["rotor.rpm"], range(4), strict=True))
     assert [(m, s) for m, s, _ in points] == [
         (0.05, 600.0), (0.05, 1800.0), (0.075, 600.0), (0.075, 1800.0)
@@ -338,3 +351,20 @@ def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
         assert min(breakage[(mass, 1800.0)]) > max(breakage[(mass, 600.0)]), breakage
     report = (out / "report.md").read_text()
     assert "## Best setting" in report and "## Trends along rotor.rpm" in report
+    assert "## Trade-offs" in report and any(f" rpm, {g} g |" in report for g in (50, 75))
+
+
+def _traded(x: float, throughput: float, damage: float, energy: float) -> Point:
+    mean = {"released_fraction": 1.0, "damaged_fraction": damage, "throughput": throughput,
+            "energy_per_kg": energy}  # fmt: skip
+    return Point(x, 0.0, 2, 0, mean, dict.fromkeys(mean, 0.0), dict.fromkeys(mean, 2))
+
+
+def test_trade_offs_are_the_settings_no_other_beats_on_all_three() -> None:
+    """Throughput up, damage and energy per kg down: (0.2, 0.01, 300) is beaten by
+    (0.2, 0.01, 250) and (0.1, 0.03, 400) by both others; a point without a throughput is never
+    on the front."""
+    points = [_traded(1, 0.2, 0.01, 300), _traded(2, 0.3, 0.02, 300),
+              _traded(3, 0.2, 0.01, 250), _traded(4, 0.1, 0.03, 400),
+              _traded(5, math.nan, 0.0, 1.0)]  # fmt: skip
+    assert [p.x for p in trade_offs(points)] == [2, 3]

@@ -7,8 +7,12 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from perga.cli.common import AddParser, cluster, problems, study_options, with_progress
+
+if TYPE_CHECKING:
+    from perga.studies.window import WindowStudy
 
 
 def _study(args: argparse.Namespace):
@@ -64,7 +68,7 @@ def window(args: argparse.Namespace) -> int:
     """The operating window's runs, maps and report."""
     from perga.studies.study_file import StudyError
     from perga.studies.window import in_window, run_window, window_study
-    from perga.studies.window_report import write_maps, write_report
+    from perga.studies.window_report import write_maps, write_report, write_trade_offs
 
     try:
         study = window_study(
@@ -77,12 +81,15 @@ def window(args: argparse.Namespace) -> int:
         )
     except StudyError as exc:
         return problems(exc.problems)
+    if args.posterior is not None:
+        return _window_odds(args, study)
     start = time.perf_counter()
     result = with_progress(
         args,
         lambda progress: run_window(study, args.output, progress=progress, **cluster(args)),
     )
     write_maps(result, args.output)
+    write_trade_offs(result, args.output)
     write_report(result, args.output)
     best = result.best.point
     if best is None:
@@ -97,7 +104,49 @@ def window(args: argparse.Namespace) -> int:
         f"{len(result.rows)} runs ({result.ran} run now, {result.reused} found finished, "
         f"{result.failed} failed) in {time.perf_counter() - start:.1f} s; {inside} of "
         f"{len(result.points)} points in the window; {verdict} "
-        f"-> {args.output}/report.md, window.parquet, window.png"
+        f"-> {args.output}/report.md, window.parquet, window.png, trade-offs.png"
+    )
+    if result.failed:
+        return _failed(result.failed, args.output / "results.parquet")
+    return 0
+
+
+def _window_odds(args: argparse.Namespace, study: WindowStudy) -> int:
+    """The window under the calibration's uncertainty (``--posterior``)."""
+    from perga.studies.study_file import StudyError
+    from perga.studies.window_odds import assumed_values, odds_jobs, read_posterior, run_odds
+    from perga.studies.window_odds_report import (
+        write_odds_map,
+        write_odds_report,
+        write_odds_table,
+    )
+
+    try:
+        posterior = read_posterior(args.posterior, args.draws, args.seed)
+        odds_jobs(study, posterior, args.replicates, args.output)
+    except StudyError as exc:
+        return problems(exc.problems)
+    start = time.perf_counter()
+    result = with_progress(
+        args,
+        lambda progress: run_odds(
+            study, posterior, args.replicates, args.output, progress=progress, **cluster(args)
+        ),
+    )
+    write_odds_table(result, args.output)
+    write_odds_map(result, args.output)
+    write_odds_report(result, assumed_values(study, posterior.keys), args.output)
+    best = result.best
+    verdict = (
+        "no setting has a draw inside the window"
+        if best is None
+        else f"best {study.axes[0]} = {best.x:.6g}, {study.axes[1]} = {best.y:.6g}: "
+        f"P = {best.probability:.2f} ({best.low:.2f}-{best.high:.2f})"
+    )
+    print(
+        f"{len(result.rows)} runs ({result.ran} run now, {result.failed} failed) in "
+        f"{time.perf_counter() - start:.1f} s; {verdict} -> {args.output}/report.md, "
+        "odds.parquet, odds.png"
     )
     if result.failed:
         return _failed(result.failed, args.output / "results.parquet")
@@ -206,7 +255,22 @@ def add_parsers(add: AddParser) -> None:
         metavar="KEY=VALUES",
         help="an axis KEY=LO:HI:N (exactly two), or a fixed KEY=VALUE",
     )
-    parser.add_argument("--replicates", type=int, default=2, help="runs per point (default 2)")
+    parser.add_argument(
+        "--replicates",
+        type=int,
+        default=2,
+        help="runs per point (default 2); with --posterior, seeds per parameter set",
+    )
+    parser.add_argument(
+        "--posterior",
+        type=Path,
+        metavar="CALIBRATION",
+        help="a perga calibrate output: map the probability that each setting is inside the "
+        "window over parameter sets drawn from its posterior (odds.png, report.md)",
+    )
+    parser.add_argument(
+        "--draws", type=int, default=8, help="with --posterior: parameter sets, in [2, 10000]"
+    )
     parser.add_argument(
         "--release-target", type=float, default=0.9, help="least released fraction, in [0, 1]"
     )

@@ -25,6 +25,10 @@ Four methods:
   corrects the analytical model (a shot's oblique-impact law) with a GP discrepancy
   (:mod:`perga.studies.surrogate`).
 
+Every method writes its posterior sample, ``posterior.parquet`` (a column per fitted key; the
+least-squares one drawn from its linearised normal N(θ̂, s²(JᵀJ)⁻¹) within the bounds), which
+``perga window --posterior`` draws its parameter sets from.
+
 Runs of an evaluation are study runs like any other (keyed by their resolved case), so an
 interrupted calibration resumes where it stopped and repeated points cost nothing.
 """
@@ -41,6 +45,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 import tomli_w
 from distributed import Client
 from scipy import optimize, stats
@@ -354,6 +360,9 @@ def least_squares(model: Model, x0: np.ndarray, step: float = 1e-3) -> Fit:
     scale = 1.0 if model.data.weighted else rss / dof
     cov = scale * np.linalg.pinv(j.T @ j)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    draws = np.random.default_rng(0).multivariate_normal(
+        result.x, cov, size=LINEARISED_DRAWS, check_valid="ignore"
+    )
     t = float(stats.t.ppf(0.975, dof))
     sensitivity = j * sd[:, None]  # d(simulated)/dθ
     spread = t * np.sqrt(np.clip(np.einsum("ij,jk,ik->i", sensitivity, cov, sensitivity), 0, None))
@@ -373,6 +382,7 @@ def least_squares(model: Model, x0: np.ndarray, step: float = 1e-3) -> Fit:
         band=np.stack([simulated - spread, simulated + spread], axis=-1)
         .reshape(*shape, 2)
         .tolist(),
+        samples=draws[np.all((draws >= lo) & (draws <= hi), axis=1)].tolist(),
     )
 
 
@@ -443,6 +453,11 @@ class Calibration:
     data: Data
     simulated: np.ndarray
 
+
+POSTERIOR = "posterior.parquet"
+"""The posterior sample's file in a calibration's directory (module doc)."""
+LINEARISED_DRAWS = 4000
+"""Draws of the least-squares posterior (its linearised normal)."""
 
 METHODS = ("least-squares", "bayes", "surrogate", "two-fidelity")
 """The calibration methods (module doc)."""
@@ -520,4 +535,11 @@ def calibrate(
         },
     }
     (directory / "fit.json").write_text(json.dumps(record, indent=2, default=float) + "\n")
+    write_posterior(fit, directory / POSTERIOR)
     return Calibration(fit, data, simulated)
+
+
+def write_posterior(fit: Fit, path: Path) -> None:
+    """The fit's posterior sample as Parquet, a column per fitted key (SI)."""
+    samples = np.asarray(fit.samples if fit.samples else [fit.values], dtype=float)
+    pq.write_table(pa.table({k: samples[:, i] for i, k in enumerate(fit.keys)}), path)

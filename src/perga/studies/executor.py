@@ -98,12 +98,14 @@ def run_missing(
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,
+    function: Callable[[Job], dict[str, Any]] = run_job,
 ) -> int:
     """Call ``on_row(row)`` for every job and return how many ran now: first the rows of the
     runs found finished (a failed one runs again only with ``retry_failed``), then, as they
-    finish, those of the others, run on ``client``, the cluster at ``scheduler`` or a local
-    cluster of ``workers`` processes (:func:`dask_client`). ``progress(done, total)`` once
-    the finished runs are found and after each row that arrives."""
+    finish, those of the others, ``function(job)`` each (a run), on ``client``, the cluster at
+    ``scheduler`` or a local cluster of ``workers`` processes (:func:`dask_client`).
+    ``progress(done, total)`` once the finished runs are found and after each row that
+    arrives."""
     todo = []
     for job in jobs:
         row = finished_row(job)
@@ -124,5 +126,5 @@ def run_missing(
 
     if todo:
         with dask_client(client, scheduler, workers) as c:
-            execute(c, todo, arrived)
+            execute(c, todo, arrived, function)
     return len(todo)

@@ -26,6 +26,7 @@ import pyarrow.parquet as pq
 
 from perga.studies.design import axis
 from perga.studies.executor import Progress
+from perga.studies.pareto import pareto_front
 from perga.studies.study_file import Study, StudyError, study_from_options
 from perga.studies.sweep import sweep
 
@@ -35,6 +36,8 @@ RELEASE, DAMAGE, THROUGHPUT, ENERGY = METRICS
 LEDGER = "ledger_closure"
 """Also kept per run (a run whose ledger misses its case's tolerance is not "ok": the runner's
 status "completed, ledger off", with its reason among its point's notes)."""
+WINDOW_OBJECTIVES = {THROUGHPUT: "max", DAMAGE: "min", ENERGY: "min"}
+"""The trade-offs: throughput (kg/s) up, damaged fraction (-) and energy per kg (J/kg) down."""
 SPEED_KEYS = ("rotor.rpm", "rotor.omega")
 """Keys whose axis is the speed axis of the trend checks."""
 TABLE = "window.parquet"
@@ -311,14 +314,24 @@ def write_window_table(columns: dict[str, list[Any]], directory: Path) -> tuple[
     return parquet, csv
 
 
+def trade_offs(points: list[Point]) -> list[Point]:
+    """The points no other beats on every one of throughput (more), damage and energy per kg
+    (less): the Pareto front a designer chooses from (:func:`perga.studies.pareto.pareto_front`;
+    a point missing one of the three is never on it)."""
+    values = np.array([[p.mean[m] for m in WINDOW_OBJECTIVES] for p in points]).reshape(-1, 3)
+    return [points[i] for i in pareto_front(values, list(WINDOW_OBJECTIVES.values()))]
+
+
 @dataclass(frozen=True)
 class WindowResult:
-    """A finished window study: its points, best point, trends and the sweep's rows and
-    counts, for the maps and report (:mod:`perga.studies.window_report`)."""
+    """A finished window study: its points, best point, Pareto front (:func:`trade_offs`),
+    trends and the sweep's rows and counts, for the maps and report
+    (:mod:`perga.studies.window_report`)."""
 
     window: WindowStudy
     points: list[Point]
     best: Best
+    front: list[Point]
     trends: list[Trend]
     rows: list[dict[str, Any]]
     ran: int
@@ -350,5 +363,6 @@ def run_window(
     found = trends(window, points)
     write_window_table(table_columns(window, points), directory)
     return WindowResult(
-        window, points, best, found, result.rows, result.ran, result.reused, result.failed
-    )
+        window, points, best, trade_offs(points), found, result.rows, result.ran, result.reused,
+        result.failed,
+    )  # fmt: skip

@@ -1,5 +1,7 @@
 """The window study's maps (``window.png``: one panel per metric over the two keys, the operating
-window hatched) and report (``report.md``: the grid, the best setting, how sure, the trends)."""
+window hatched; ``trade-offs.png``: the Pareto front) and report (``report.md``: the grid, the
+best setting, how sure, the trade-offs, the trends), in the user's units
+(:mod:`perga.studies.user_units`)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import numpy as np
 from matplotlib.patches import Rectangle
 
 from perga.output.figures import new_figure, save
-from perga.stats.metrics import METRICS as REGISTRY
+from perga.studies.user_units import axis_label, metric_label
 from perga.studies.window import (
     DAMAGE,
     ENERGY,
@@ -28,7 +30,7 @@ if TYPE_CHECKING:
     from perga.studies.window import WindowResult
 
 
-def _edges(values: list[float]) -> np.ndarray:
+def cell_edges(values: list[float]) -> np.ndarray:
     """Cell edges around grid values (midpoints; the ends half a spacing out), as pcolormesh's
     ``shading="nearest"`` draws them."""
     v = np.asarray(values, dtype=float)
@@ -43,16 +45,19 @@ def write_maps(result: WindowResult, directory: Path) -> Path:
     outlined (release_mean ≥ target and damage_mean ≤ limit)."""
     window = result.window
     xs, ys = window.grid()
-    xe, ye = _edges(xs), _edges(ys)
+    (xl, xf), (yl, yf) = axis_label(window.axes[0]), axis_label(window.axes[1])
+    ux, uy = [x * xf for x in xs], [y * yf for y in ys]
+    xe, ye = cell_edges(ux), cell_edges(uy)
     fig, axes = new_figure((11.0, 8.5), 2, 2)
     for ax, metric in zip(axes.flat, METRICS, strict=True):
+        label, factor = metric_label(metric)
         grid = np.full((len(ys), len(xs)), math.nan)
         for p in result.points:
-            grid[ys.index(p.y), xs.index(p.x)] = p.mean[metric]
+            grid[ys.index(p.y), xs.index(p.x)] = p.mean[metric] * factor
         finite = np.isfinite(grid)
-        mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), shading="nearest", cmap="viridis")
+        mesh = ax.pcolormesh(ux, uy, np.ma.masked_invalid(grid), shading="nearest", cmap="viridis")
         if finite.any():
-            fig.colorbar(mesh, ax=ax, label=f"{metric} [{REGISTRY[metric].unit}]")
+            fig.colorbar(mesh, ax=ax, label=label)
         for p in result.points:
             i, j = ys.index(p.y), xs.index(p.x)
             if in_window(p, window.release_target, window.damage_limit):
@@ -62,39 +67,74 @@ def write_maps(result: WindowResult, directory: Path) -> Path:
                         fill=False, hatch="//", edgecolor="red", linewidth=2.0,
                     )
                 )  # fmt: skip
-            text = "n/a" if math.isnan(p.mean[metric]) else f"{p.mean[metric]:.3g}"
-            ax.text(p.x, p.y, text, ha="center", va="center", fontsize=8, color="black",
+            text = "n/a" if math.isnan(p.mean[metric]) else f"{p.mean[metric] * factor:.3g}"
+            ax.text(p.x * xf, p.y * yf, text, ha="center", va="center", fontsize=8, color="black",
                     bbox={"facecolor": "white", "alpha": 0.6, "lw": 0})  # fmt: skip
         if not any(in_window(p, window.release_target, window.damage_limit) for p in result.points):
             ax.text(0.5, 1.0, "no point in the window", transform=ax.transAxes, ha="center",
                     va="bottom", fontsize=8, color="red")  # fmt: skip
-        ax.set_xlabel(window.axes[0])
-        ax.set_ylabel(window.axes[1])
-        ax.set_title(f"{metric}: mean of {window.study.replicates} replicates")
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+        ax.set_title(f"{label}: mean of {window.study.replicates} replicates")
     fig.suptitle(
-        f"operating window (hatched): {RELEASE} ≥ {window.release_target:g}, "
-        f"{DAMAGE} ≤ {window.damage_limit:g}"
+        f"operating window (hatched): {metric_label(RELEASE)[0]} ≥ "
+        f"{100 * window.release_target:g}, {metric_label(DAMAGE)[0]} ≤ "
+        f"{100 * window.damage_limit:g}"
     )
     path = directory / "window.png"
     save(fig, path)
     return path
 
 
+def write_trade_offs(result: WindowResult, directory: Path) -> Path:
+    """``DIR/trade-offs.png``: every point's damage against its throughput, coloured by its
+    energy per kg, the Pareto front (:func:`perga.studies.window.trade_offs`) ringed and
+    labelled with its setting."""
+    (tl, tf), (dl, df), (el, ef) = (metric_label(m) for m in (THROUGHPUT, DAMAGE, ENERGY))
+    shown = [p for p in result.points if all(math.isfinite(p.mean[m]) for m in METRICS)]
+    fig, ax = new_figure((7.5, 5.5))
+    if shown:
+        dots = ax.scatter(
+            [p.mean[THROUGHPUT] * tf for p in shown], [p.mean[DAMAGE] * df for p in shown],
+            c=[p.mean[ENERGY] * ef for p in shown], cmap="viridis", s=40, zorder=2,
+        )  # fmt: skip
+        fig.colorbar(dots, ax=ax, label=el)
+    for p in result.front:
+        ax.plot(p.mean[THROUGHPUT] * tf, p.mean[DAMAGE] * df, "o", ms=14, mfc="none", mec="red")
+        ax.annotate(_short(result, p), (p.mean[THROUGHPUT] * tf, p.mean[DAMAGE] * df),
+                    textcoords="offset points", xytext=(6, 6), fontsize=7)  # fmt: skip
+    ax.set_xlabel(tl)
+    ax.set_ylabel(dl)
+    ax.set_title(f"trade-offs: {len(result.front)} settings no other beats on throughput, "
+                 "damage and energy (ringed)", fontsize=9)  # fmt: skip
+    path = directory / "trade-offs.png"
+    save(fig, path)
+    return path
+
+
+def _short(result: WindowResult, point: Point) -> str:
+    """A setting in the user's units, short: ``1300 rpm, 75 g``."""
+    (al, af), (bl, bf) = (axis_label(k) for k in result.window.axes)
+    return f"{point.x * af:.4g} {al.split('[')[1][:-1]}, {point.y * bf:.4g} {bl.split('[')[1][:-1]}"
+
+
 def _pm(point: Point, metric: str, unit: bool = False) -> str:
-    """``mean ± sd`` (and the unit), with the number of runs that gave it when some did not."""
-    mean, sd = point.mean[metric], point.sd[metric]
+    """``mean ± sd`` in the user's unit (and the unit), with the number of runs that gave it
+    when some did not."""
+    label, factor = metric_label(metric)
+    mean, sd = point.mean[metric] * factor, point.sd[metric] * factor
     if math.isnan(mean):
         return "n/a"
     text = f"{mean:.4g} ± {sd:.2g}" if math.isfinite(sd) else f"{mean:.4g}"
-    if unit and REGISTRY[metric].unit != "-":
-        text += f" {REGISTRY[metric].unit}"
+    if unit:
+        text += f" {label.split('[')[1][:-1]}"
     ok = point.runs - point.failed
     return text if point.count[metric] == ok else f"{text} (n = {point.count[metric]})"
 
 
 def _setting(result: WindowResult, point: Point) -> str:
-    a, b = result.window.axes
-    return f"{a} = {point.x:.6g}, {b} = {point.y:.6g}"
+    (al, af), (bl, bf) = (axis_label(k) for k in result.window.axes)
+    return f"{al} = {point.x * af:.6g}, {bl} = {point.y * bf:.6g}"
 
 
 def _trend_line(t: Trend, speed: str, other: str, *, rising: bool) -> str:
@@ -118,6 +158,7 @@ def report_text(result: WindowResult) -> str:
     rt, dl = window.release_target, window.damage_limit
     xs, ys = window.grid()
     a, b = window.axes
+    (al, af), (bl, bf) = axis_label(a), axis_label(b)
     fixed = {k: p.values[0] for k, p in study.parameters.items() if k not in window.axes}  # type: ignore[index]
     lines = [
         "# Operating window",
@@ -126,8 +167,8 @@ def report_text(result: WindowResult) -> str:
         "",
         "## Grid",
         "",
-        f"- {a}: {', '.join(f'{v:.6g}' for v in xs)}",
-        f"- {b}: {', '.join(f'{v:.6g}' for v in ys)}",
+        f"- {a}, {al}: {', '.join(f'{v * af:.6g}' for v in xs)}",
+        f"- {b}, {bl}: {', '.join(f'{v * bf:.6g}' for v in ys)}",
         f"- replicates: {study.replicates} per point (each its own solver.seed; seed {study.seed})",
     ]
     if fixed:
@@ -138,13 +179,13 @@ def report_text(result: WindowResult) -> str:
         "",
         "Mean ± standard deviation over replicates; * inside the window.",
         "",
-        f"| {a} | {b} | " + " | ".join(f"{m} [{REGISTRY[m].unit}]" for m in METRICS) + " | in |",
+        f"| {al} | {bl} | " + " | ".join(metric_label(m)[0] for m in METRICS) + " | in |",
         "|" + "---|" * (len(METRICS) + 3),
     ]
     for p in result.points:
         mark = "*" if in_window(p, rt, dl) else ""
         cells = " | ".join(_pm(p, m) for m in METRICS)
-        lines.append(f"| {p.x:.6g} | {p.y:.6g} | {cells} | {mark} |")
+        lines.append(f"| {p.x * af:.6g} | {p.y * bf:.6g} | {cells} | {mark} |")
     lines += ["", "## Best setting", ""]
     best = result.best
     if best.point is None:
@@ -192,6 +233,25 @@ def report_text(result: WindowResult) -> str:
         )
     if study.replicates < 2:
         lines.append("- one replicate per point: no spread is known (sd n/a, taken as 0)")
+    lines += [
+        "",
+        "## Trade-offs",
+        "",
+        "The settings no other beats on all of throughput (more), damage and energy per kg "
+        "(less), the Pareto front (trade-offs.png): a designer trades among these.",
+        "",
+        f"| setting | {metric_label(THROUGHPUT)[0]} | {metric_label(DAMAGE)[0]} | "
+        f"{metric_label(ENERGY)[0]} | in |",
+        "|---|---|---|---|---|",
+    ]
+    for p in result.front:
+        mark = "*" if in_window(p, rt, dl) else ""
+        lines.append(
+            f"| {_short(result, p)} | {_pm(p, THROUGHPUT)} | {_pm(p, DAMAGE)} | "
+            f"{_pm(p, ENERGY)} | {mark} |"
+        )
+    if not result.front:
+        lines.append("| none: no point gave all three | | | | |")
     speed = window.speed_axis
     other = b if speed == a else a
     lines += [
@@ -213,7 +273,11 @@ def report_text(result: WindowResult) -> str:
                   "or ended with their energy ledger off (left out of the means), by point:",
                   ""]  # fmt: skip
         lines += [f"- {ax} = {p.x:g}, {ay} = {p.y:g}: {'; '.join(p.notes)}" for p in noted]
-    lines += ["", "Files: window.parquet, window.csv, window.png, results.parquet, runs/.", ""]
+    lines += [
+        "",
+        "Files: window.parquet, window.csv, window.png, trade-offs.png, results.parquet, runs/.",
+        "",
+    ]
     return "\n".join(lines)
 
 
