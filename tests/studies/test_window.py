@@ -16,6 +16,7 @@ from perga.stats.metrics import METRICS as REGISTRY
 from perga.stats.metrics import MetricUnavailableError, evaluate
 from perga.stats.tables import load_run
 from perga.studies.pareto import pareto_front
+from perga.studies.study_file import StudyError
 from perga.studies.user_units import metric_label
 from perga.studies.window import (
     METRICS,
@@ -23,10 +24,12 @@ from perga.studies.window import (
     Point,
     aggregate,
     best_point,
+    foundations,
     in_window,
     shortfall,
     trade_offs,
     trend,
+    window_study,
 )
 from tests.figure_data import saved_figures
 
@@ -368,3 +371,27 @@ def test_trade_offs_are_the_settings_no_other_beats_on_all_three() -> None:
               _traded(3, 0.2, 0.01, 250), _traded(4, 0.1, 0.03, 400),
               _traded(5, math.nan, 0.0, 1.0)]  # fmt: skip
     assert [p.x for p in trade_offs(points)] == [2, 3]
+
+
+def test_the_report_says_what_the_map_rests_on(tmp_path: Path) -> None:
+    """The bundled case: soft contacts of 0.1 ms and its step, the energy law that makes the
+    release independent of both; with rigid contacts the step; a case with the force law only
+    says its release depends on the numerics."""
+    sets = ["rotor.rpm=600:1800:2", "hammers.mass=0.05:0.075:2"]
+    soft = "\n".join(foundations(window_study(CASE, sets)))
+    assert "soft linear contacts, contact duration 0.1 ms" in soft and "granule step" in soft
+    assert "detachment_energy = 0.06 J" in soft and "whatever the contact's stiffness" in soft
+    assert "none calibrated" in soft
+    with pytest.raises(StudyError, match="a study's values are numbers, strings or booleans"):
+        window_study(CASE, [*sets, 'contact_model={kind="rigid"}'])
+    rigid_case = tmp_path / "rigid.toml"
+    text = CASE.read_text().replace("../geometry", str(ROOT / "geometry"))
+    start = text.index("[contact_model]")
+    rigid_case.write_text(text[:start] + '[contact_model]\nkind = "rigid"\n\n' +
+                          text[text.index("[solver]"):])  # fmt: skip
+    rigid = foundations(window_study(rigid_case, sets))
+    assert rigid[0].startswith("- contacts: rigid impulses (Pymunk), step ")
+    forced = tmp_path / "forced.toml"
+    forced.write_text(text.replace("detachment_energy = 0.06\n", ""))
+    lines = foundations(window_study(forced, sets), calibrated=True)
+    assert "the release depends on the numerics" in lines[1] and len(lines) == 2

@@ -18,7 +18,7 @@ from scipy.stats import norm
 from perga.cli import main
 from perga.studies.jobs import Job, derived_seed
 from perga.studies.study_file import StudyError
-from perga.studies.window import window_study
+from perga.studies.window import foundations, window_study
 from perga.studies.window_odds import assumed_values, odds_jobs, read_posterior, run_odds
 from perga.studies.window_odds_report import odds_report, write_odds_map, write_odds_table
 
@@ -112,7 +112,8 @@ def test_probability_map_of_a_toy_is_its_closed_form(tmp_path: Path) -> None:
     assert table["probability"] == [o.probability for o in result.odds]
     assert (tmp_path / "odds" / "odds.csv").read_text().startswith('"rotor.rpm","hammers.mass"')
     assert write_odds_map(result, tmp_path / "odds").stat().st_size > 10_000
-    text = odds_report(result, assumed_values(window, posterior.keys))
+    text = odds_report(result, assumed_values(window, posterior.keys), foundations(window, True))
+    assert "contact duration 0.1 ms" in text and "detachment_energy = 0.06 J" in text
     assert f"calibrated (drawn from the posterior): `{KEY}`" in text
     assert "materials.beebread.density = 1350.0" in text and KEY + " =" not in text
     best = result.best

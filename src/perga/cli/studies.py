@@ -114,6 +114,7 @@ def window(args: argparse.Namespace) -> int:
 def _window_odds(args: argparse.Namespace, study: WindowStudy) -> int:
     """The window under the calibration's uncertainty (``--posterior``)."""
     from perga.studies.study_file import StudyError
+    from perga.studies.window import foundations
     from perga.studies.window_odds import assumed_values, odds_jobs, read_posterior, run_odds
     from perga.studies.window_odds_report import (
         write_odds_map,
@@ -135,7 +136,8 @@ def _window_odds(args: argparse.Namespace, study: WindowStudy) -> int:
     )
     write_odds_table(result, args.output)
     write_odds_map(result, args.output)
-    write_odds_report(result, assumed_values(study, posterior.keys), args.output)
+    numerics = foundations(study, calibrated=True)
+    write_odds_report(result, assumed_values(study, posterior.keys), numerics, args.output)
     best = result.best
     verdict = (
         "no setting has a draw inside the window"

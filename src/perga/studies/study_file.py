@@ -167,7 +167,13 @@ def parse_values(text: str, where: str) -> Parameter:
         except (ValueError, ValidationError) as exc:
             message = exc.errors()[0]["msg"] if isinstance(exc, ValidationError) else str(exc)
             raise StudyError([f"{where}: LO:HI:N needs LO < HI and N >= 2 ({message})"]) from None
-    return Parameter(values=[parse_value(v.strip()) for v in text.split(",")])
+    try:
+        return Parameter(values=[parse_value(v.strip()) for v in text.split(",")])
+    except ValidationError:
+        raise StudyError(
+            [f"{where}: a study's values are numbers, strings or booleans (V1,V2,... or "
+             "LO:HI:N); set a whole table in the case file"]
+        ) from None  # fmt: skip
 
 
 def study_from_options(

@@ -26,6 +26,7 @@ import pyarrow.parquet as pq
 
 from perga.studies.design import axis
 from perga.studies.executor import Progress
+from perga.studies.jobs import toml_value
 from perga.studies.pareto import pareto_front
 from perga.studies.study_file import Study, StudyError, study_from_options
 from perga.studies.sweep import sweep
@@ -283,6 +284,60 @@ def trends(window: WindowStudy, points: list[Point]) -> list[Trend]:
     return out
 
 
+def fixed_overrides(window: WindowStudy) -> tuple[str, ...]:
+    """The study's fixed ``KEY=VALUE`` (its parameters with one value, not an axis)."""
+    return tuple(
+        f"{k}={toml_value(p.values[0])}"
+        for k, p in window.study.parameters.items()
+        if k not in window.axes and p.values is not None and len(p.values) == 1
+    )
+
+
+def foundations(window: WindowStudy, calibrated: bool = False) -> list[str]:
+    """What a map of ``window`` rests on, as Markdown list items: the contact model with its
+    duration and step, the comb's release law with its values, and (unless ``calibrated``:
+    a map under a posterior says what it draws) that every material value is the case's."""
+    from perga.model.compile import load_system
+
+    case, system = load_system(window.study.case, overrides=fixed_overrides(window))
+    model = case.contact_model
+    if model.kind == "rigid":
+        contacts = f"rigid impulses (Pymunk), step {system.granule_dt * 1e6:.3g} µs"
+    else:
+        given = (
+            f"contact duration {model.duration * 1e3:.3g} ms (contact_model.duration: a "
+            "physical value only where a measured stiffness gives it)"
+            if model.duration is not None
+            else "stiffness from contact_model.stiffness or the materials' moduli"
+        )
+        step = f"granule step {system.granule_dt * 1e6:.3g} µs"
+        contacts = f"soft {model.kind} contacts, {given}, {step}"
+    material = case.materials[case.granules.material]
+    if material.detachment_force is None:
+        release = "no bonds: no granule is held"
+    elif material.detachment_energy is not None:
+        release = (
+            f"a blow must leave a held granule more than detachment_energy = "
+            f"{material.detachment_energy:g} J (a blow begins above detachment_force = "
+            f"{material.detachment_force:g} N): the same outcome whatever the contact's "
+            "stiffness or the step"
+        )
+    else:
+        release = (
+            f"the force law, detachment_force = {material.detachment_force:g} N: at an impact "
+            "the force is set by the contact's stiffness (soft) or the step (rigid), so the "
+            "release depends on the numerics"
+        )
+    lines = [f"- contacts: {contacts}", f"- release from the comb: {release}"]
+    if not calibrated:
+        lines.append(
+            "- every material and contact value is the case's own, none calibrated (the "
+            "case's description gives each one's source); `perga window --posterior` carries "
+            "a calibration's uncertainty into the map"
+        )
+    return lines
+
+
 def table_columns(window: WindowStudy, points: list[Point]) -> dict[str, list[Any]]:
     """The window table as columns: the two axes, runs and failed runs, each metric's mean,
     sd and number of runs that gave it, and the window (nominal, pessimistic: means moved 1 sd
@@ -333,6 +388,7 @@ class WindowResult:
     best: Best
     front: list[Point]
     trends: list[Trend]
+    foundations: list[str]
     rows: list[dict[str, Any]]
     ran: int
     reused: int
@@ -363,6 +419,6 @@ def run_window(
     found = trends(window, points)
     write_window_table(table_columns(window, points), directory)
     return WindowResult(
-        window, points, best, trade_offs(points), found, result.rows, result.ran, result.reused,
-        result.failed,
+        window, points, best, trade_offs(points), found, foundations(window), result.rows,
+        result.ran, result.reused, result.failed,
     )  # fmt: skip

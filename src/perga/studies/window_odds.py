@@ -26,10 +26,10 @@ from perga.case.overrides import apply_overrides
 from perga.studies.calibrate import POSTERIOR
 from perga.studies.design import points
 from perga.studies.executor import Progress, run_missing
-from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
+from perga.studies.jobs import Job, derived_seed, make_job, run_job
 from perga.studies.study_file import StudyError
 from perga.studies.sweep import RESULTS, write_table
-from perga.studies.window import METRICS, WindowStudy
+from perga.studies.window import METRICS, WindowStudy, fixed_overrides
 from perga.studies.window_posterior import SettingOdds, best_setting, setting_odds
 
 
@@ -193,12 +193,3 @@ def assumed_values(window: WindowStudy, fitted: list[str]) -> list[str]:
         if table in marked:
             walk(table, marked[table])
     return out
-
-
-def fixed_overrides(window: WindowStudy) -> tuple[str, ...]:
-    """The study's fixed ``KEY=VALUE`` (its parameters with one value, not an axis)."""
-    return tuple(
-        f"{k}={toml_value(p.values[0])}"
-        for k, p in window.study.parameters.items()
-        if k not in window.axes and p.values is not None and len(p.values) == 1
-    )

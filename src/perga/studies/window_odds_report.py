@@ -99,9 +99,10 @@ def _split(o: SettingOdds, metric: str) -> str:
     return f"{s.mean * factor:.3g} (θ {sd_p:.2g}, seed {sd_s:.2g})"
 
 
-def odds_report(result: OddsResult, assumed: list[str]) -> str:
+def odds_report(result: OddsResult, assumed: list[str], numerics: list[str]) -> str:
     """The Markdown report (module doc); ``assumed``: the case's material and contact keys not
-    fitted, each as ``KEY = VALUE``, which the map takes as known."""
+    fitted, each as ``KEY = VALUE``, which the map takes as known; ``numerics``: lines on the
+    contacts and the release law (:func:`perga.studies.window.foundations`)."""
     window = result.window
     a, b = window.axes
     (al, af), (bl, bf) = axis_label(a), axis_label(b)
@@ -121,6 +122,7 @@ def odds_report(result: OddsResult, assumed: list[str]) -> str:
         "",
         "## What the map rests on",
         "",
+        *numerics,
         "- calibrated (drawn from the posterior): " + ", ".join(f"`{k}`" for k in post.keys),
         "- assumed (the case's values, taken as known): "
         + (", ".join(f"`{k}`" for k in assumed) if assumed else "none"),
@@ -156,8 +158,10 @@ def odds_report(result: OddsResult, assumed: list[str]) -> str:
     return "\n".join(lines)
 
 
-def write_odds_report(result: OddsResult, assumed: list[str], directory: Path) -> Path:
+def write_odds_report(
+    result: OddsResult, assumed: list[str], numerics: list[str], directory: Path
+) -> Path:
     """``DIR/report.md`` (:func:`odds_report`)."""
     path = directory / "report.md"
-    path.write_text(odds_report(result, assumed), encoding="utf-8")
+    path.write_text(odds_report(result, assumed, numerics), encoding="utf-8")
     return path

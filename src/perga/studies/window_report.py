@@ -186,7 +186,7 @@ def report_text(result: WindowResult) -> str:
         mark = "*" if in_window(p, rt, dl) else ""
         cells = " | ".join(_pm(p, m) for m in METRICS)
         lines.append(f"| {p.x * af:.6g} | {p.y * bf:.6g} | {cells} | {mark} |")
-    lines += ["", "## Best setting", ""]
+    lines += ["", "## What the map rests on", "", *result.foundations, "", "## Best setting", ""]
     best = result.best
     if best.point is None:
         lines.append("No point gave both a release and a damage fraction: no setting to name.")
