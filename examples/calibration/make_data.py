@@ -84,7 +84,11 @@ def write(example: Example, path: Path, workers: int | None) -> Path:
     study = Study(case=example.case, parameters=parameters, metrics=list(example.noise),
                   replicates=example.replicates, seed=SEED)  # fmt: skip
     with tempfile.TemporaryDirectory() as work:
-        rows = sweep(study, Path(work), workers=workers).rows
+        result = sweep(study, Path(work), workers=workers)
+        if result.failed:
+            reasons = {row["reason"] for row in result.rows if row["status"] != "ok"}
+            raise SystemExit(f"{result.failed} run(s) failed, no data written: {reasons}")
+        rows = result.rows
     rng = np.random.default_rng(SEED)
     with path.open("w", newline="", encoding="utf-8") as stream:
         writer = csv.writer(stream)

@@ -86,8 +86,8 @@ def _feed(rate: float, start: float, stop: float, total: int | None) -> Feed:
     spec = FeedSpec(
         rate=rate, start=start, stop=stop, total=total, region=((0.0, 0.0), (0.01, 0.01), 0.0),
         velocity=(0.0, 0.0), piece=((0.0, 0.0),), sizes=Sizes((0.002,), (1.0,), True),
-        areal_density=1.0, mass=None, material="bb", rolls=True, bond_force=None, bond_time=0.0,
-        seed=0,
+        areal_density=1.0, mass=None, material="bb", rolls=True, bond_force=None,
+        bond_energy=math.inf, seed=0,
     )  # fmt: skip
     return Feed(spec)
 

@@ -81,8 +81,12 @@ def window(args: argparse.Namespace) -> int:
         )
     except StudyError as exc:
         return problems(exc.problems)
+    if args.posterior is not None and args.adaptive is not None:
+        return problems(["--posterior and --adaptive: give one of them"])
     if args.posterior is not None:
         return _window_odds(args, study)
+    if args.adaptive is not None:
+        return _window_adaptive(args, study)
     start = time.perf_counter()
     result = with_progress(
         args,
@@ -108,6 +112,33 @@ def window(args: argparse.Namespace) -> int:
     )
     if result.failed:
         return _failed(result.failed, args.output / "results.parquet")
+    return 0
+
+
+def _window_adaptive(args: argparse.Namespace, study: WindowStudy) -> int:
+    """The window's boundary from at most ``--adaptive BUDGET`` runs."""
+    from perga.studies.window_adaptive import run_adaptive
+    from perga.studies.window_adaptive_report import write_adaptive
+
+    xs, ys = study.grid()
+    start = time.perf_counter()
+    try:
+        result = with_progress(
+            args,
+            lambda progress: run_adaptive(
+                study, args.output, budget=args.adaptive, progress=progress, **cluster(args)
+            ),
+        )
+    except ValueError as exc:
+        return problems([f"--adaptive: {exc}"])
+    write_adaptive(result, args.output)
+    search = result.search
+    print(
+        f"{search.runs} runs ({result.ran} run now) in {search.rounds} rounds, "
+        f"{time.perf_counter() - start:.1f} s, stopped: {search.stopped}; "
+        f"{int(search.inside.sum())} of {len(xs) * len(ys)} settings in the window "
+        f"-> {args.output}/adaptive.md, adaptive.parquet, adaptive.png"
+    )
     return 0
 
 
@@ -272,6 +303,14 @@ def add_parsers(add: AddParser) -> None:
     )
     parser.add_argument(
         "--draws", type=int, default=8, help="with --posterior: parameter sets, in [2, 10000]"
+    )
+    parser.add_argument(
+        "--adaptive",
+        type=int,
+        metavar="BUDGET",
+        help="find the window's boundary on the grid from at most BUDGET runs: a coarse grid, "
+        "then runs where Gaussian-process predictions leave a setting's class unsure "
+        "(adaptive.png, adaptive.md)",
     )
     parser.add_argument(
         "--release-target", type=float, default=0.9, help="least released fraction, in [0, 1]"
