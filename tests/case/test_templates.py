@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from perga.case.templates import TEMPLATES
+from perga.case.templates import CASES, TEMPLATES
 from perga.cli import main
 
 
@@ -36,3 +36,31 @@ def test_refusals_name_the_file_or_the_templates(tmp_path, monkeypatch, capsys):
     assert main(["new", "fed-separator", "-o", "z.toml"]) == 2  # a geometry file in the way
     assert (tmp_path / "geometry" / "chamber_screen.svg").read_text() == "mine"
     assert not (tmp_path / "z.toml").exists()
+
+
+def test_beside_the_same_geometry_file_it_is_kept(tmp_path, monkeypatch, capsys):
+    """The README's tour from the repository root: geometry/chamber_screen.svg there holds the
+    template's bytes, so the case is written and the file kept, with and without --overwrite
+    (in an editable install the file is the template's own); a different file is refused with
+    the remedy and nothing is written."""
+    root = CASES.parent
+    monkeypatch.chdir(root)
+    before = (root / "geometry" / "chamber_screen.svg").read_bytes()
+    mine = root / f"tour-{tmp_path.name}.toml"
+    try:
+        for extra in ([], ["--overwrite"]):
+            assert main(["new", "fed-separator", "-o", mine.name, *extra]) == 0
+            assert (root / "geometry" / "chamber_screen.svg").read_bytes() == before
+    finally:
+        mine.unlink(missing_ok=True)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "geometry").mkdir()
+    (tmp_path / "geometry" / "chamber_screen.svg").write_bytes(before)
+    assert main(["new", "fed-separator", "-o", "same.toml"]) == 0
+    assert "wrote same.toml; next" in capsys.readouterr().out
+    (tmp_path / "geometry" / "chamber_screen.svg").write_bytes(before + b"<!-- mine -->")
+    assert main(["new", "fed-separator", "-o", "other.toml"]) == 2
+    assert "differs from the template's chamber_screen.svg: write the case into another folder" in (
+        capsys.readouterr().err
+    )
+    assert not (tmp_path / "other.toml").exists()

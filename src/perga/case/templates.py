@@ -25,19 +25,30 @@ TEMPLATES = {
 _FILE = re.compile(r'(kind = "file", path = ")([^"]+)(")')
 
 
+def _same_bytes(a: Path, b: Path) -> bool:
+    """Whether files ``a`` and ``b`` exist and hold the same bytes (or are one file)."""
+    return b.exists() and (a.resolve() == b.resolve() or a.read_bytes() == b.read_bytes())
+
+
 def write_template(name: str, out: Path, overwrite: bool = False) -> list[Path]:
     """Write template ``name`` to ``out`` and its geometry files to ``out``'s folder's
-    ``geometry/``; returns the files written. FileExistsError for a file in the way (unless
-    ``overwrite``), KeyError for an unknown name."""
+    ``geometry/`` (one already there with the same bytes is kept); returns the files written.
+    Everything is checked before anything is written: FileExistsError for a file in the way
+    (unless ``overwrite``), KeyError for an unknown name."""
     source = CASES / TEMPLATES[name][0]
     text = source.read_text(encoding="utf-8")
     copies = {}
     for match in _FILE.finditer(text):
         geometry = (source.parent / match.group(2)).resolve()
         copies[match.group(2)] = (geometry, out.parent / "geometry" / geometry.name)
-    for target in [out, *(t for _, t in copies.values())]:
-        if target.exists() and not overwrite:
-            raise FileExistsError(f"{target} exists (--overwrite replaces it)")
+    if out.exists() and not overwrite:
+        raise FileExistsError(f"{out} exists (--overwrite replaces it)")
+    for geometry, target in copies.values():
+        if target.exists() and not overwrite and not _same_bytes(geometry, target):
+            raise FileExistsError(
+                f"{target} exists and differs from the template's {geometry.name}: write the "
+                "case into another folder (-o DIR/case.toml), or --overwrite replaces it"
+            )
     for relative, (_, target) in copies.items():
         text = text.replace(f'path = "{relative}"', f'path = "geometry/{target.name}"')
     header = (
@@ -47,7 +58,10 @@ def write_template(name: str, out: Path, overwrite: bool = False) -> list[Path]:
     )
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(header + text, encoding="utf-8")
+    written = [out]
     for geometry, target in copies.values():
-        target.parent.mkdir(exist_ok=True)
-        shutil.copyfile(geometry, target)
-    return [out, *(t for _, t in copies.values())]
+        if not _same_bytes(geometry, target):
+            target.parent.mkdir(exist_ok=True)
+            shutil.copyfile(geometry, target)
+            written.append(target)
+    return written
