@@ -79,6 +79,9 @@ def test_unavailable_metrics_say_why(tmp_path: Path) -> None:
         evaluate(run, "granule_speed_after_impact:2")
     with pytest.raises(MetricUnavailableError, match="outside the run"):
         evaluate(run, "radius_at:1.0")
+    # the rebound test's hammer stands still: no share of its energy to speak of
+    with pytest.raises(MetricUnavailableError, match="no impact with a moving hammer"):
+        evaluate(run, "transfer_efficiency")
     assert evaluate(run, "radius_at:0.0") == pytest.approx(
         math.hypot(*run.track(0)["x"][:1], *run.track(0)["y"][:1])
     )

@@ -25,6 +25,11 @@ FloatArray = NDArray[np.float64]
 HEAD_ON = 1e-6
 """|v_t|/|v_n| below which an impact is head-on and β = −v_t'/v_t is not defined."""
 
+HAMMER_AT_REST = 1e-6
+"""The hammer's kinetic energy before an impact over the impact's ½μv_n² below which the hammer
+is at rest for it (e.g. a granule thrown at a standing hammer): a ratio to the hammer's energy
+is not defined (it would be the granule's energy over round-off)."""
+
 
 @dataclass(frozen=True)
 class ImpactStats:
@@ -137,6 +142,8 @@ def impact_stats(run: Run, index: int) -> ImpactStats:
     relative_energy = 0.5 * mu * vn**2
     before = granule_energy(run, int(row["granule"]), row["time"])
     gain, hammer = row["granule_energy_gain"], row["hammer_energy_before"]
+    if hammer < HAMMER_AT_REST * relative_energy:
+        hammer = 0.0
     return ImpactStats(
         time=row["time"],
         hammer=int(row["hammer"]),
