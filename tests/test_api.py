@@ -37,3 +37,20 @@ def test_names_and_refusals(tmp_path):
     )
     with pytest.raises(ValueError, match="no table 'trajectories'"):
         run.dataframe("trajectories")
+
+
+def test_the_package_doc_names_only_commands_that_exist():
+    """Every ``perga COMMAND [--option]`` that help(perga) names is a command with those options
+    (it named a ``perga metrics --list`` that does not exist)."""
+    import re
+
+    import perga
+    from perga.cli import build_parser
+
+    commands = build_parser()._subparsers._group_actions[0].choices
+    named = re.findall(r"`perga ([a-z-]+)((?: --?[a-z-]+)*)`", perga.__doc__)
+    assert named
+    for command, options in named:
+        assert command in commands, command
+        known = {o for a in commands[command]._actions for o in a.option_strings}
+        assert set(options.split()) <= known, (command, options)

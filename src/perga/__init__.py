@@ -14,7 +14,7 @@ The Python API (each name imported on first use, so that ``import perga`` stays 
     summary = perga.simulate("cases/separator.toml", "runs/sep", overrides=["solver.duration=0.1"])
     run = perga.load_run("runs/sep")                  # case, summary, tables as numpy columns
     run.granules["speed"], run.dataframe("impacts")   # a DataFrame needs perga[notebook]
-    perga.evaluate(run, "ledger_closure")             # a named metric (perga metrics --list)
+    perga.evaluate(run, "ledger_closure")             # a named metric (`perga metrics` lists them)
 
 Studies (sweeps on Dask, calibration, the operating window) are in :mod:`perga.studies`;
 ``examples/`` has scripts that use this API (run by the tests).
