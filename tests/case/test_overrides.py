@@ -112,3 +112,24 @@ def test_a_run_records_its_overrides(tmp_path: Path, capsys) -> None:
     assert evaluate(load_run(out), "first_impact_restitution") == pytest.approx(0.55, abs=1e-12)
     assert main(["run", str(REBOUND), "-o", str(tmp_path / "bad"), "--set", "rotor.rpm=-1"]) == 2
     assert "rotor.rpm: Input should be greater than or equal to 0.00001" in capsys.readouterr().err
+
+
+def test_a_bad_value_is_blamed_on_the_set_that_gave_it(tmp_path) -> None:
+    """A problem the file alone does not have names the --set that made it (by its key, or
+    every --set when the key is not one of theirs); the file's own problems name the file."""
+    with pytest.raises(CaseError) as exc:
+        load_case(SEPARATOR, overrides=["rotor.speed=900", "solver.duration=0.1"])
+    assert exc.value.problems == [
+        f"{SEPARATOR} with --set rotor.speed=900: rotor.speed: unknown key; did you mean 'rpm' "
+        "or 'omega'?"
+    ]
+    with pytest.raises(CaseError) as exc:
+        load_case(SEPARATOR, overrides=["contacts.granule-hammer.friction=2.5"])
+    assert exc.value.problems[0].startswith(
+        f"{SEPARATOR} with --set contacts.granule-hammer.friction=2.5: contacts[0].friction: "
+    )
+    bad = tmp_path / "bad.toml"
+    bad.write_text(SEPARATOR.read_text().replace("rpm = ", "rmp = ", 1))
+    with pytest.raises(CaseError) as exc:
+        load_case(bad, overrides=["rotor.radius=0.2"])
+    assert exc.value.problems == [f"{bad}: rotor.rmp: unknown key; did you mean 'rpm'?"]

@@ -7,7 +7,6 @@ Problems read ``cases/x.toml: hammers.mass: must be > 0 (got -0.01)``; unknown k
 
 from __future__ import annotations
 
-import difflib
 import tomllib
 import typing
 from collections.abc import Sequence
@@ -16,7 +15,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from perga.case.names import name_problems
+from perga.case.names import name_problems, unknown_key
 from perga.case.overrides import OverrideError, apply_overrides, split_override
 from perga.case.schema import NOT_A_NUMBER, Case
 
@@ -77,6 +76,7 @@ def _resolve(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | N
 
 
 def _describe(error: dict[str, Any]) -> str:
+    """A schema error as "key: message" (the key dotted, ``[i]`` for an index)."""
     if error["type"] == NOT_A_NUMBER:  # raised for its table: the key and value are in ctx
         ctx = error["ctx"]
         error = error | {"loc": (*error["loc"], ctx["field"]), "input": ctx["value"]}
@@ -84,14 +84,44 @@ def _describe(error: dict[str, Any]) -> str:
     key = ".".join(str(p) if not isinstance(p, int) else f"[{p}]" for p in loc).replace(".[", "[")
     if error["type"] == "extra_forbidden":
         options = list(owner.model_fields) if owner else []
-        close = difflib.get_close_matches(str(loc[-1]), options, n=1)
-        hint = f"; did you mean '{close[0]}'?" if close else f"; allowed: {', '.join(options)}"
-        return f"{key}: unknown key{hint}"
+        return f"{key}: {unknown_key(str(loc[-1]), options)}"
     message = error["msg"].removeprefix("Value error, ")
     got = f" (got {error['input']!r})" if "input" in error and error["type"] != "missing" else ""
     field = owner.model_fields.get(str(loc[-1])) if owner and loc else None
     expected = f" [{field.description}]" if field and field.description else ""
     return f"{key or '(top level)'}: {message}{got}{expected}"
+
+
+def _blamed(
+    problems: list[str],
+    data: dict[str, Any],
+    path: Path,
+    source_dir: Path | None,
+    overrides: Sequence[str],
+) -> list[str]:
+    """``problems`` of the case with ``overrides``, each one the file alone does not have
+    (``data``, validated again) named by the override that set its key (or a table above it),
+    or by all of them."""
+    try:
+        validate_case(data, path, source_dir)
+        own: set[str] = set()
+    except CaseError as exc:
+        own = set(exc.problems)
+    blamed = []
+    for problem in problems:
+        line = problem.removeprefix(f"{path}: ")
+        if problem in own or line == problem:
+            blamed.append(problem)
+            continue
+        key = line.split(":", 1)[0]
+        named = [
+            o
+            for o in overrides
+            if key == (name := split_override(o)[0]) or key.startswith((f"{name}.", f"{name}["))
+        ]
+        sets = ", ".join(f"--set {o}" for o in named or overrides)
+        blamed.append(f"{path} with {sets}: {line}")
+    return blamed
 
 
 def read_case_data(path: str | Path) -> dict[str, Any]:
@@ -143,9 +173,14 @@ def load_case(
     Relative geometry paths start at ``source_dir`` (default: the case file's folder; a run
     directory's copy of a case passes its original folder).
     """
+    path = Path(path)
     data = read_case_data(path)
-    if overrides:
-        data = overridden(data, overrides, path)
-    case = validate_case(data, path, source_dir)
-    case.attach_source(case.source_dir, data, tuple(overrides), path=Path(path))
+    changed = overridden(data, overrides, path) if overrides else data
+    try:
+        case = validate_case(changed, path, source_dir)
+    except CaseError as exc:
+        if not overrides:
+            raise
+        raise CaseError(_blamed(exc.problems, data, path, source_dir, overrides)) from None
+    case.attach_source(case.source_dir, changed, tuple(overrides), path=path)
     return case

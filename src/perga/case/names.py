@@ -1,11 +1,42 @@
 """The names a case uses: every material it names is defined, and every pair of materials
 its scene brings into contact has a [[contacts]] entry. Checked with the schema by
 :func:`perga.case.load.load_case` (the physical cross-checks need the names:
-:mod:`perga.model.checks`)."""
+:mod:`perga.model.checks`). And the hint for an unknown key (:func:`unknown_key`)."""
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Sequence
+
 from perga.case.schema import Case
+
+MEANT = {
+    "speed": ("rpm", "omega"),
+    "rotation": ("rpm", "omega"),
+    "angular_velocity": ("omega", "rpm"),
+    "rev": ("rpm",),
+    "revs": ("rpm",),
+    "diameter": ("radius",),
+    "weight": ("mass",),
+    "e": ("restitution",),
+    "mu": ("friction",),
+    "time": ("duration",),
+    "step": ("dt",),
+    "timestep": ("dt",),
+}
+"""Words users type for a quantity whose key has another name -> the keys they probably mean
+(offered where the table has them; a spelling's nearest key can be a different quantity:
+``speed`` is spelled like ``shape``)."""
+
+
+def unknown_key(name: str, options: Sequence[str]) -> str:
+    """The message for an unknown key ``name`` among ``options``: the keys its meaning or its
+    spelling suggests, or the allowed keys."""
+    meant = [k for k in MEANT.get(name.lower(), ()) if k in options]
+    close = meant or difflib.get_close_matches(name, list(options), n=1)
+    if close:
+        return "unknown key; did you mean " + " or ".join(f"'{k}'" for k in close) + "?"
+    return f"unknown key; allowed: {', '.join(options)}"
 
 
 def name_problems(case: Case) -> list[str]:

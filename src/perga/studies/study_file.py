@@ -22,7 +22,6 @@ A parameter is a case key (:mod:`perga.case.overrides`) with ``values``, or a ``
 
 from __future__ import annotations
 
-import difflib
 import tomllib
 from pathlib import Path
 from typing import Literal
@@ -31,6 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from perga.case import CaseError
 from perga.case.load import overridden, read_case_data, validate_case
+from perga.case.names import unknown_key
 from perga.case.overrides import parse_value
 from perga.model.compile import check
 from perga.stats.metrics import METRICS, parse_metric
@@ -93,9 +93,7 @@ def _describe(error: dict) -> str:
     loc = ".".join(str(p) for p in error["loc"])
     if error["type"] == "extra_forbidden":
         options = [*Study.model_fields] if len(error["loc"]) == 1 else [*Parameter.model_fields]
-        close = difflib.get_close_matches(str(error["loc"][-1]), options, n=1)
-        hint = f"; did you mean '{close[0]}'?" if close else f"; allowed: {', '.join(options)}"
-        return f"{loc}: unknown key{hint}"
+        return f"{loc}: {unknown_key(str(error['loc'][-1]), options)}"
     got = f" (got {error['input']!r})" if "input" in error and error["type"] != "missing" else ""
     return f"{loc or '(top level)'}: {error['msg'].removeprefix('Value error, ')}{got}"
 
