@@ -48,6 +48,8 @@ def test_adaptive_window_of_a_toy_on_dask(tmp_path: Path) -> None:
     setting is replicate k with the dense study's seed k; a second search finds them all."""
     window = window_study(CASE, SETS, replicates=3, release_target=0.9, damage_limit=0.05)
     out = tmp_path / "adaptive"
+    out.mkdir()
+    (out / "results.parquet").write_bytes(b"a dense study's table")  # kept: not the search's
     result = run_adaptive(window, out, budget=40, workers=1, function=toy_run)
     search = result.search
     assert search.runs <= 40 and len(result.rows) == search.runs == result.ran
@@ -63,6 +65,8 @@ def test_adaptive_window_of_a_toy_on_dask(tmp_path: Path) -> None:
         assert row["replicate"] == k and row["seed"] == derived_seed(0, k)
     again = run_adaptive(window, out, budget=40, workers=1, function=toy_run)
     assert again.ran == 0 and again.search.runs == search.runs
+    assert (out / "results.parquet").read_bytes() == b"a dense study's table"
+    assert pq.read_table(out / "adaptive-runs.parquet").num_rows == search.runs
     write_adaptive(result, out)
     table = pq.read_table(out / "adaptive.parquet").to_pydict()
     assert sum(table["runs"]) == search.runs and len(table["probability"]) == 49

@@ -18,8 +18,11 @@ from perga.studies.adaptive import AdaptiveResult, adaptive_window
 from perga.studies.design import points
 from perga.studies.executor import Progress, dask_client, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job, run_job
-from perga.studies.sweep import RESULTS, write_table
+from perga.studies.sweep import write_table
 from perga.studies.window import WindowStudy
+
+RUNS = "adaptive-runs.parquet"
+"""The adaptive search's rows (a dense study in the same folder keeps its results.parquet)."""
 
 COARSE_REPLICATES = 2
 """Runs per setting of the first, coarse grid: two, so that the Gaussian processes see the
@@ -52,7 +55,7 @@ def run_adaptive(
 ) -> AdaptiveWindow:
     """The adaptive search over ``window``'s grid (module doc) with at most ``budget`` runs
     (each by ``function``, a run; failed ones found again run again only with
-    ``retry_failed``), its rows in ``DIR/results.parquet``."""
+    ``retry_failed``), its rows in ``DIR/adaptive-runs.parquet``."""
     directory.mkdir(parents=True, exist_ok=True)
     study = window.study
     fixed = next(iter(points(study)))
@@ -75,7 +78,7 @@ def run_adaptive(
                                retry_failed=retry_failed, function=function)  # fmt: skip
             batch = [got[j.key] for j in jobs]
             rows.extend(batch)
-            write_table(rows, directory / RESULTS)
+            write_table(rows, directory / RUNS)
             if progress:
                 progress(len(rows), budget)
             return [_metrics(r) for r in batch]

@@ -71,7 +71,7 @@ def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
         "",
         f"Case `{Path(window.study.case).name}`; window: {rl} ≥ {100 * window.release_target:g} "
         f"and {df} ≤ {100 * window.damage_limit:g}; grid {len(search.xs)} × {len(search.ys)} "
-        f"({a}: {ux.min():.4g}-{ux.max():.4g} {xl}; {b}: {uy.min():.4g}-{uy.max():.4g} {yl}).",
+        f"({xl} {ux.min():.4g}-{ux.max():.4g}; {yl} {uy.min():.4g}-{uy.max():.4g}).",
         "",
         f"- runs: {search.runs} in {search.rounds} rounds ({result.ran} run now, the others "
         f"found finished); stopped: {search.stopped}",
@@ -85,7 +85,7 @@ def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
         "- each metric between the runs: a Gaussian process's prediction (adaptive.parquet "
         "gives its mean and sd at every setting)",
         "",
-        "Files: adaptive.parquet, adaptive.csv, adaptive.png, results.parquet, runs/.",
+        "Files: adaptive.parquet, adaptive.csv, adaptive.png, adaptive-runs.parquet, runs/.",
         "",
     ]
     (directory / "adaptive.md").write_text("\n".join(lines), encoding="utf-8")
