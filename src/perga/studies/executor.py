@@ -1,13 +1,12 @@
 """Where a study's runs execute: a Dask cluster (``dask.distributed``).
 
 By default a ``LocalCluster`` of worker processes on loopback, one thread each and numba on one
-thread (``NUMBA_NUM_THREADS=1``), as many workers as the machine has free cores
-(``perga.cores``: its cores less what other processes use, at least one). Given a scheduler's
-address, the runs go to
-that cluster instead (one started with ``dask scheduler`` / ``dask worker``, or by
-``dask-jobqueue`` on SLURM or PBS: start it there and pass its address); given a
-``dask.distributed.Client``, to that client's cluster. The run directories must be on a file
-system the workers and this process share.
+thread (each run sets it, :func:`perga.studies.jobs.run_job`), as many workers as the machine
+has free cores (``perga.cores``: its cores less what other processes use, at least one). Given
+a scheduler's address, the runs go to that cluster instead (one started with ``dask scheduler``
+/ ``dask worker``, or by ``dask-jobqueue`` on SLURM or PBS: start it there and pass its
+address); given a ``dask.distributed.Client``, to that client's cluster. The run directories
+must be on a file system the workers and this process share.
 
 :func:`run_missing` hands over the rows of the runs found finished (by key,
 :mod:`perga.studies.jobs`) and runs the others; :func:`execute` submits every job, hands each
@@ -33,8 +32,11 @@ from perga.studies.jobs import Job, failed_row, finished_row, run_job
 Progress = Callable[[int, int], None]
 """progress(runs done, runs in all)."""
 
-WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-"""Environment of local workers: one thread each, numba's and BLAS's included."""
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+"""Environment of local workers: BLAS on one thread. Not ``NUMBA_NUM_THREADS``: Dask's Nanny sets
+``env`` after the spawned worker has imported the main script, so numba imported by that script
+has read its thread count already, and a different one in the environment makes every compile
+after numba's threads started fail (tests/studies/test_executor.py)."""
 
 
 @contextlib.contextmanager
