@@ -2,7 +2,8 @@
 grid of rotor speed and hammer mass, 3 replicates per cell (the dense map), then the adaptive
 search on the same grid in the same folder (its runs are the dense study's, found by key: it
 costs nothing here and is judged cell by cell). Prints the runs each used and the cells they
-classify differently.
+classify differently; writes the dense study's report and maps, the adaptive one's, and
+adaptive-vs-dense.png (the two classifications side by side, the cells they differ on marked).
 
     python benchmarks/window_adaptive.py [--budget 100] [--duration 0.3] [--workers 2] [-o DIR]
 """
@@ -15,8 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
+from perga.output.figures import new_figure, save
+from perga.studies.adaptive import AdaptiveResult
+from perga.studies.user_units import axis_label
 from perga.studies.window import in_window, run_window, window_study
 from perga.studies.window_adaptive import run_adaptive
+from perga.studies.window_adaptive_report import write_adaptive
+from perga.studies.window_report import cell_edges, write_maps, write_report, write_trade_offs
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "bee-bread-separator.toml"
@@ -31,6 +37,31 @@ def quiet_case(directory: Path) -> Path:
     path = directory / "bee-bread-separator.toml"
     path.write_text(text)
     return path
+
+
+def side_by_side(
+    dense: np.ndarray, adaptive: AdaptiveResult, axes: tuple[str, str], path: Path
+) -> None:
+    """The dense classification and the adaptive one on one figure, differing cells marked."""
+    (xl, xf), (yl, yf) = axis_label(axes[0]), axis_label(axes[1])
+    ux, uy = np.asarray(adaptive.xs) * xf, np.asarray(adaptive.ys) * yf
+    fig, (left, right) = new_figure((11.0, 4.8), ncols=2)
+    for ax, inside, title in (
+        (left, dense, f"dense: {dense.size} cells × 3 replicates"),
+        (right, adaptive.inside, f"adaptive: {adaptive.runs} runs"),
+    ):
+        ax.pcolormesh(cell_edges(list(ux)), cell_edges(list(uy)), inside.astype(float),
+                      cmap="RdYlGn", vmin=-0.3, vmax=1.3)  # fmt: skip
+        ax.set_title(f"{title}; green: inside", fontsize=9)
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+    grid_x, grid_y = np.meshgrid(ux, uy)
+    differ = dense != adaptive.inside
+    right.scatter(grid_x[differ], grid_y[differ], marker="x", c="k", s=60,
+                  label="classified otherwise than dense")  # fmt: skip
+    if differ.any():
+        right.legend(loc="upper left", fontsize=7)
+    save(fig, path)
 
 
 def main() -> None:
@@ -71,6 +102,11 @@ def main() -> None:
         f"({100 * differ / inside.size:.0f} %), {time.perf_counter() - start:.0f} s"
     )
     print(f"runs: adaptive/dense = {search.runs / len(dense.rows):.2f}")
+    for write in (write_maps, write_trade_offs, write_report):
+        write(dense, args.output)
+    write_adaptive(adaptive, args.output)
+    side_by_side(inside, search, window.axes, args.output / "adaptive-vs-dense.png")
+    print(f"-> {args.output}/report.md, adaptive.md, adaptive-vs-dense.png")
 
 
 if __name__ == "__main__":
