@@ -4,6 +4,7 @@ a study run again runs nothing, an interrupted one only what is missing."""
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import os
@@ -120,6 +121,13 @@ def test_a_finished_study_runs_nothing_and_an_interrupted_one_only_what_is_missi
     study, out = _study(points=6), tmp_path / "study"
     first = sweep(study, out, workers=2)
     assert (first.ran, first.reused, first.failed) == (6, 0, 0)
+    with (out / "results.csv").open(newline="") as stream:  # the same rows, for a spreadsheet
+        spreadsheet = list(csv.DictReader(stream))
+    assert [r["key"] for r in spreadsheet] == [r["key"] for r in first.rows]
+    assert [float(r["first_impact_restitution [-]"]) for r in spreadsheet] == [
+        r["first_impact_restitution"] for r in first.rows
+    ]
+    assert "wall_time [s]" in spreadsheet[0] and "granules.placement.angle" in spreadsheet[0]
     again = sweep(study, out, workers=2)
     assert (again.ran, again.reused) == (0, 6)
     assert again.rows == first.rows

@@ -3,10 +3,11 @@
 ``DIR/results.parquet`` holds a row per run: the run's key, the parameters (one column per case
 key), the replicate and its seed, the metrics (nan where a run cannot give one; the reason in
 ``notes``), ``status`` ("ok", "failed", "interrupted"), ``reason``, ``wall_time`` (s) and the
-run's directory (``DIR/runs/KEY``). The table is rewritten atomically as rows arrive, so an
-interrupted study leaves a readable table. Running a study again runs only what is missing:
-finished runs are found by key (:mod:`perga.studies.jobs`); failed ones run again only with
-``retry_failed``.
+run's directory (``DIR/runs/KEY``); ``DIR/results.csv`` the same for a spreadsheet, a metric's
+and the wall time's unit in its header (``throughput [kg/s]``). Both are rewritten atomically as
+rows arrive, so an interrupted study leaves readable tables. Running a study again runs only
+what is missing: finished runs are found by key (:mod:`perga.studies.jobs`); failed ones run
+again only with ``retry_failed``.
 """
 
 from __future__ import annotations
@@ -18,9 +19,11 @@ from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
+import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 from distributed import Client
 
+from perga.stats.metrics import METRICS
 from perga.studies.design import points
 from perga.studies.executor import Progress, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job
@@ -45,7 +48,9 @@ def jobs_of(study: Study, directory: Path) -> list[Job]:
 
 
 def write_table(rows: list[dict[str, Any]], path: Path) -> None:
-    """``rows`` as a Parquet table at ``path``, written to a temporary file then renamed."""
+    """``rows`` as a Parquet table at ``path`` and a CSV beside it (the same name, ``.csv``; a
+    metric's unit in its header, :func:`unit_header`), each written to a temporary file then
+    renamed."""
     columns: dict[str, list[Any]] = {}
     for row in rows:
         for name in row:
@@ -54,6 +59,19 @@ def write_table(rows: list[dict[str, Any]], path: Path) -> None:
     temporary = path.with_name(path.name + ".tmp")
     pq.write_table(table, temporary)
     os.replace(temporary, path)
+    spreadsheet = path.with_suffix(".csv")
+    temporary = spreadsheet.with_name(spreadsheet.name + ".tmp")
+    pacsv.write_csv(table.rename_columns([unit_header(n) for n in table.column_names]), temporary)
+    os.replace(temporary, spreadsheet)
+
+
+def unit_header(column: str) -> str:
+    """A results column's CSV header: a metric's name with its unit (``throughput [kg/s]``,
+    ``released_fraction [-]``), ``wall_time [s]``; any other column as it is."""
+    metric = METRICS.get(column.split(":", 1)[0])
+    if metric is not None:
+        return f"{column} [{metric.unit}]"
+    return "wall_time [s]" if column == "wall_time" else column
 
 
 def read_table(path: Path) -> dict[str, list[Any]]:
