@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from perga.cli.common import AddParser, problems
+from perga.cli.common import AddParser, problems, warn
 
 
 def validate(args: argparse.Namespace) -> int:
@@ -16,12 +16,13 @@ def validate(args: argparse.Namespace) -> int:
     failed = 0
     for path in args.cases:
         try:
-            validated(path)
+            case = validated(path)
         except CaseError as exc:
             failed += 1
             problems(exc.problems)
         else:
             print(f"ok: {path}")
+            warn(path, case)
     return 2 if failed else 0
 
 

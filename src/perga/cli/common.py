@@ -1,5 +1,5 @@
-"""What the commands share: printing problems (exit 2), argument types, the study options on
-Dask, progress bars around studies, the bundled cases."""
+"""What the commands share: printing problems (exit 2) and warnings, argument types, the study
+options on Dask, progress bars around studies, the bundled cases."""
 
 from __future__ import annotations
 
@@ -7,9 +7,12 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from perga.progress import counted, progress_bar
+
+if TYPE_CHECKING:
+    from perga.case.schema import Case
 
 BUNDLED_CASES = Path(__file__).resolve().parents[3] / "cases"
 
@@ -31,6 +34,14 @@ def problems(lines: Sequence[str]) -> int:
     for line in lines:
         print(f"error: {line}", file=sys.stderr)
     return 2
+
+
+def warn(path: object, case: Case) -> None:
+    """Print a warning line for each implausible value of ``case`` (read from ``path``)."""
+    from perga.case.plausibility import implausible
+
+    for line in implausible(case):
+        print(f"warning: {path}: {line}", file=sys.stderr)
 
 
 def at_least_one(text: str) -> int:

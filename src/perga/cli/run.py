@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from perga.cli.common import AddParser, problems
+from perga.cli.common import AddParser, problems, warn
 from perga.progress import progress_bar
 from perga.stopping import StopRequest, exit_status
 
@@ -23,6 +23,7 @@ def run(args: argparse.Namespace) -> int:
                           tuple(args.set or ()), args.start_from)  # fmt: skip
         try:
             case, system = load(request)
+            warn(args.case or args.resume, case)
             stop.check()
             prepared = prepare(request, case, system)
         except BadRequestError as exc:
