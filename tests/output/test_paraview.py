@@ -27,7 +27,8 @@ state = open({state!r}).read()
 # as File > Load State does: its text, with __file__ the state's path
 exec(compile(state, "<state>", "exec"), {{"__name__": "__main__", "__file__": {state!r}}})
 scene = pv.GetAnimationScene()
-scene.AnimationTime = scene.TimeKeeper.TimestepValues[-1]
+times = list(scene.TimeKeeper.TimestepValues)
+open({times!r}, "w").write(f"{{scene.AnimationTime!r}} {{times[0]!r}} {{times[-1]!r}}")
 pv.SaveScreenshot({png!r}, pv.GetActiveView(), ImageResolution=[900, 900])
 open({names!r}, "w").write("\\n".join(sorted(k[0] for k in pv.GetSources())))
 os._exit(0)  # the GUI would wait for its user
@@ -77,7 +78,8 @@ def coloured_pixels(png: Path, margin: int = 0) -> int:
 def test_the_state_written_with_the_run_opens_in_the_paraview_gui(run, tmp_path):
     """RUN/vtk/paraview_state.py: ParaView's GUI loads it as a state (``--state``, its Load
     State path) without a Python error; executed in the GUI's Python as Load State does, it
-    makes one source per file and a picture of the granules at their true size. Counted in the
+    makes one source per file and a picture of the granules at their true size, at the run's
+    last frame (at t = 0 every granule is at rest, one colour). Counted in the
     900 × 900 picture: the granules' colours in its central 600 × 600 px (the colour bar, ~8,000
     coloured px, is outside it) (300 discs 2.5 mm in radius, the 0.4 m chamber in
     ~640 px: ~8 px across, ~50 px each; asserted 30 each), the grey hammers (six 60 × 20 mm
@@ -87,10 +89,13 @@ def test_the_state_written_with_the_run_opens_in_the_paraview_gui(run, tmp_path)
     empty.write_text('<?xml version="1.0" ?>\n<pqevents>\n</pqevents>\n')
     loaded = gui(f"--state={state}", f"--test-script={empty}", "--exit")
     assert "Traceback" not in loaded.stdout + loaded.stderr, loaded.stdout + loaded.stderr
-    png, names = tmp_path / "gui.png", tmp_path / "sources.txt"
+    png, names, times = tmp_path / "gui.png", tmp_path / "sources.txt", tmp_path / "times.txt"
     driver = tmp_path / "driver.py"
-    driver.write_text(GUI_DRIVER.format(state=str(state), png=str(png), names=str(names)))
+    driver.write_text(GUI_DRIVER.format(state=str(state), png=str(png), names=str(names),
+                                        times=str(times)))  # fmt: skip
     gui(f"--script={driver}")
+    shown, first, last = (float(t) for t in times.read_text().split())
+    assert shown == last > first  # it opens at the run's end, granules moving, not at rest
     sources = names.read_text().split("\n")
     assert sources == sorted(
         ["chamber", "granules", "granules at true size", "hammers", "rotor", "unit disc"]

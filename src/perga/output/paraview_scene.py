@@ -6,11 +6,11 @@ builds its 2-D picture from.
 
 The scene, from the files of :mod:`perga.output.vtk`: granules at their true size as filled
 discs (``Glyph With Custom Source``: a 32-gon ``Disk`` of radius 0.5 scaled by ``radius`` with
-ScaleFactor 2)
-coloured by ``speed`` on Viridis (no greys, so they stand out from the machine) from 0 to the
-run's top speed; hammers as grey surfaces; the rotor disc, under them, as its grey outline; the
-chamber as dark lines. Each file is a source of its own, named in the Pipeline Browser, so that
-any part can be hidden, recoloured or filtered. 2-D interaction, the camera on the chamber.
+ScaleFactor 2) coloured by ``speed`` on Viridis (no greys, so they stand out from the machine)
+from 0 to the run's top speed; hammers as grey surfaces; the rotor disc, under them, as its grey
+outline; the chamber as dark lines; all at the run's last frame. Each file is a source of its
+own, named in the Pipeline Browser, so that any part can be hidden, recoloured or filtered. 2-D
+interaction, the camera on the chamber.
 """
 
 from pathlib import Path
@@ -70,7 +70,9 @@ def show_run(vtk: Path, speed_max: float, chamber: bool) -> None:
     bar.Title, bar.ComponentTitle = "speed, m/s", ""
     bar.TitleColor = bar.LabelColor = [0.0, 0.0, 0.0]
 
-    pv.GetAnimationScene().UpdateAnimationUsingDataTimeSteps()
+    scene = pv.GetAnimationScene()
+    scene.UpdateAnimationUsingDataTimeSteps()
+    scene.AnimationTime = scene.EndTime  # the last frame: at t = 0 every granule is at rest
     pv.SetActiveSource(discs)
     view.ResetCamera()
     pv.Render(view)
