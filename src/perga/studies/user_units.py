@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+from perga.stats.metrics import METRICS
+
 AXES: dict[str, tuple[str, float]] = {
     "rotor.rpm": ("rotor speed [rpm]", 1.0),
     "rotor.omega": ("rotor speed [rpm]", 60.0 / (2.0 * math.pi)),
@@ -30,5 +32,9 @@ def axis_label(key: str) -> tuple[str, float]:
 
 
 def metric_label(metric: str) -> tuple[str, float]:
-    """A metric's label and factor from SI; a metric not listed keeps its name, in SI."""
-    return METRIC_UNITS.get(metric, (f"{metric} [SI]", 1.0))
+    """A metric's label and factor from SI; a metric not listed keeps its name and its SI unit
+    (:data:`perga.stats.metrics.METRICS`; "SI" for a name that is no metric)."""
+    if metric in METRIC_UNITS:
+        return METRIC_UNITS[metric]
+    known = METRICS.get(metric.split(":", 1)[0])
+    return f"{metric} [{known.unit if known else 'SI'}]", 1.0
