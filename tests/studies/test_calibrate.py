@@ -90,7 +90,9 @@ def test_least_squares_recovers_known_values(tmp_path: Path, monkeypatch) -> Non
     residuals = saved["residuals.png"].axes[0].get_lines()  # one per metric, then the zero line
     assert len(panels) == len(SD) == len(residuals) - 1
     for j, panel in enumerate(panels):
-        measured = [float(row[panel.get_ylabel()]) for row in rows]
+        metric, unit = panel.get_ylabel().split(" [")  # the metric with its unit: "e [-]"
+        assert unit == "-]"
+        measured = [float(row[metric]) for row in rows]
         assert sorted(panel.containers[0].lines[0].get_ydata()) == sorted(measured)
         model = lines(panel)["model at the fit"][1]
         assert sorted(model) == sorted(v[j] for v in record["simulated"])

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from perga.studies import sweep_report
-from perga.studies.user_units import metric_label
+from perga.studies.user_units import axis_label, metric_label
 
 
 def test_plots_are_drawn_in_the_designers_units(tmp_path: Path, monkeypatch) -> None:
@@ -44,3 +44,12 @@ def test_a_metric_without_a_designers_unit_keeps_its_si_unit() -> None:
     speed = "granule_speed_after_impact:1"
     assert metric_label(speed) == (f"{speed} [m/s]", 1.0)
     assert metric_label("damaged_fraction") == ("damaged [%]", 100.0)
+
+
+def test_a_case_key_without_a_designers_unit_keeps_its_si_unit() -> None:
+    assert axis_label("contacts.beebread-steel.restitution") == (
+        "contacts.beebread-steel.restitution [-]", 1.0
+    )  # fmt: skip
+    assert axis_label("granules.placement.angle") == ("granules.placement.angle [rad]", 1.0)
+    assert axis_label("hammers.mass") == ("hammer mass [g]", 1e3)
+    assert axis_label("effects.unknown_key") == ("effects.unknown_key [SI]", 1.0)

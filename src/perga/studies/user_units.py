@@ -26,9 +26,21 @@ METRIC_UNITS: dict[str, tuple[str, float]] = {
 """Metric -> (label with unit, factor from SI)."""
 
 
+SI_UNITS: dict[str, str] = {
+    "restitution": "-", "friction": "-", "rolling_friction": "-", "angle": "rad",
+    "duration": "s", "dt": "s", "density": "kg/m³", "detachment_energy": "J",
+    "detachment_force": "N", "speed": "m/s", "spin": "rad/s", "radius": "m", "mass": "kg",
+    "youngs_modulus": "Pa", "poisson_ratio": "-",
+}  # fmt: skip
+"""A case key's last part -> its SI unit, for the keys not in :data:`AXES`."""
+
+
 def axis_label(key: str) -> tuple[str, float]:
-    """A case key's label and factor from SI; a key not listed keeps its name, in SI."""
-    return AXES.get(key, (f"{key} [SI]", 1.0))
+    """A case key's label and factor from SI; a key not listed keeps its name and its SI unit
+    (by its last part, :data:`SI_UNITS`; "SI" where that is not known)."""
+    if key in AXES:
+        return AXES[key]
+    return f"{key} [{SI_UNITS.get(key.rsplit('.', 1)[-1], 'SI')}]", 1.0
 
 
 def metric_label(metric: str) -> tuple[str, float]:
