@@ -5,6 +5,7 @@ import matplotlib.image as mpimg
 import numpy as np
 
 from perga.cli import main
+from perga.stats.metrics import evaluate
 from perga.stats.tables import load_run
 from tests.figure_data import bar_heights, lines, saved_figures
 
@@ -75,3 +76,25 @@ def test_the_reports_figures_draw_the_runs_tables(tmp_path, monkeypatch):
     impacts = run.impacts
     assert len(impacts["time"]) > 0 and bar_heights(count).sum() == len(impacts["time"])
     assert np.array_equal(speed.get_lines()[0].get_ydata(), -impacts["normal_velocity_before"])
+
+
+def test_the_report_of_a_process_run_shows_the_process(tmp_path, monkeypatch):
+    """The bee-bread separator (comb, feed, damage, screen) for 0.05 s: the report's process
+    section gives the population as the summary counted it, each process metric in the
+    designer's units as perga metrics gives it (or why not), and the process figure."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["new", "fed-separator", "-o", "x.toml"]) == 0
+    assert main(["run", "x.toml", "--quiet", "--set", "solver.duration=0.05"]) == 0
+    assert main(["report", "runs/x"]) == 0
+    report = (tmp_path / "runs" / "x" / "report" / "report.md").read_text(encoding="utf-8")
+    run = load_run(tmp_path / "runs" / "x")
+    section = report[report.index("## Process") :]
+    for key, count in run.summary["population"].items():
+        assert f"| {key.replace('_', ' ')} | {count} |" in section
+    assert run.summary["population"]["fed"] > run.summary["granules"]  # a feed came in
+    released = evaluate(run, "released_fraction")
+    assert f"| released [%] | {released * 100:.4g} |" in section
+    assert "| damaged [%] | " in section and "| throughput [kg/h] | " in section
+    assert "| energy [kJ/kg] | " in section
+    assert "![process](process.png)" in section
+    assert _coloured(tmp_path / "runs" / "x" / "report" / "process.png") > 100

@@ -1,7 +1,9 @@
 """``perga report RUN``: one run as a Markdown page with figures (``RUN/report/``): how it ended,
 what it holds, and plots of the energy ledger's terms over time, the granules' speeds at the
-first and last frame, the impacts over time and the granules' paths (``perga render``'s). A
-figure whose table the run did not record is left out with the reason."""
+first and last frame, the impacts over time and the granules' paths (``perga render``'s); for
+a process run (comb, feed, damage or outlet) its population, the process metrics in the
+designer's units and the process figure (``perga render --process``'s). A figure or metric the
+run's tables cannot give is left out with the reason."""
 
 from __future__ import annotations
 
@@ -10,9 +12,15 @@ from pathlib import Path
 import numpy as np
 
 from perga.output.figures import new_figure, save
+from perga.output.process_figure import process_figure
 from perga.output.render import render
 from perga.run.summary import ledger_closure_text
+from perga.stats.metrics import MetricUnavailableError, evaluate
 from perga.stats.tables import Run, load_run
+from perga.studies.user_units import metric_label
+
+PROCESS_METRICS = ("released_fraction", "damaged_fraction", "throughput", "energy_per_kg")
+"""The separator's figures of merit, shown for a process run."""
 
 ENERGY_TERMS = ("drive_work", "contact_dissipation", "friction", "drag", "joint_correction",
                 "inflow", "outflow")  # fmt: skip
@@ -80,6 +88,25 @@ def _paths(run: Run, out: Path) -> str:
     return "![paths](paths.png)"
 
 
+def _process(run: Run, out: Path) -> list[str]:
+    """The process section: the population, each process metric (or why the run cannot give
+    it) and the process figure."""
+    lines = ["| | |", "| --- | --- |"]
+    for key, count in run.summary["population"].items():
+        lines.append(f"| {key.replace('_', ' ')} | {count} |")
+    for name in PROCESS_METRICS:
+        label, factor = metric_label(name)
+        try:
+            value = f"{evaluate(run, name) * factor:.4g}"
+        except MetricUnavailableError as exc:
+            value = f"n/a: {exc}"
+        lines.append(f"| {label} | {value} |")
+    if not run.granules:
+        return [*lines, "", "no process figure: granules.csv was not recorded"]
+    process_figure(run.directory, out / "process.png")
+    return [*lines, "", "![process](process.png)"]
+
+
 def _closure(energy: dict) -> str:
     """The ledger's closure in words; runs before 2026-11-26 kept no residual."""
     if energy.get("closure") is None:
@@ -101,19 +128,19 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
         ("status", f"{s.get('status')}" + (f": {s['reason']}" if s.get("reason") else "")),
         ("simulated", f"{s.get('simulated_time', 0):.4g} s in {s.get('steps')} steps of "
                       f"{s.get('dt', 0):.3g} s, {s.get('wall_time', 0):.3g} s of wall time"),
-        ("granules, hammers", f"{s.get('granules')}, {s.get('hammers')}"),
+        ("granules at the start, hammers", f"{s.get('granules')}, {s.get('hammers')}"),
         ("granule-hammer impacts", f"{s.get('impacts')}"),
         ("energy ledger closure", _closure(energy)),
     ]  # fmt: skip
     if s.get("speeds"):
         rows.append(("granule speeds at the end", f"{s['speeds']['mean']:.3g} m/s mean, "
                                                   f"{s['speeds']['max']:.3g} m/s max"))  # fmt: skip
-    if s.get("population"):
-        rows.append(("population", ", ".join(f"{k} {v}" for k, v in s["population"].items())))
     lines = [f"# Run {run.name}", "", f"Case: `{s.get('case')}`", "", "| | |", "| --- | --- |"]
     lines += [f"| {k} | {v} |" for k, v in rows]
     for warning in s.get("warnings") or []:
         lines += ["", f"Warning: {warning}"]
+    if s.get("population"):
+        lines += ["", "## Process", "", *_process(run, out)]
     for title, figure in (("Energy", _energy), ("Speeds", _speeds), ("Impacts", _impacts),
                           ("Paths in the fixed frame", _paths)):  # fmt: skip
         lines += ["", f"## {title}", "", figure(run, out)]
