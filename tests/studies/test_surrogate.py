@@ -17,7 +17,7 @@ from perga.cli import main
 from perga.studies.analytic_metrics import AnalyticModel, analytic_model
 from perga.studies.calibrate import calibrate, load_data, parse_fit
 from perga.studies.jobs import Job
-from perga.studies.surrogate import _fit_gp, _log_posterior, minimum_runs
+from perga.studies.surrogate import _log_posterior, fit_gp, minimum_runs
 from tests.studies.test_calibrate import CASE, ROOT
 
 E, F = "contacts.granule-hammer.restitution", "contacts.granule-hammer.friction"
@@ -38,7 +38,7 @@ def test_the_gp_predicts_as_scikit_learn() -> None:
     rng = np.random.default_rng(3)
     x = rng.random((12, 2))
     values = 2.0 + np.sin(3 * x[:, 0]) * x[:, 1] + 0.01 * rng.standard_normal(12)
-    gp = _fit_gp(x, values, seed=0)
+    gp = fit_gp(x, values, seed=0)
     kernel = ConstantKernel(gp.amplitude, "fixed") * Matern(gp.lengths, "fixed", nu=2.5)
     reference = GaussianProcessRegressor(kernel + WhiteKernel(gp.noise, "fixed"), optimizer=None)
     reference.fit(x, (values - gp.offset) / gp.scale)

@@ -43,8 +43,9 @@ def write_template(name: str, out: Path, overwrite: bool = False) -> list[Path]:
         copies[match.group(2)] = (geometry, out.parent / "geometry" / geometry.name)
     if out.exists() and not overwrite:
         raise FileExistsError(f"{out} exists (--overwrite replaces it)")
-    for geometry, target in copies.values():
-        if target.exists() and not overwrite and not _same_bytes(geometry, target):
+    to_copy = [(g, t) for g, t in copies.values() if not _same_bytes(g, t)]
+    for geometry, target in to_copy:
+        if target.exists() and not overwrite:
             raise FileExistsError(
                 f"{target} exists and differs from the template's {geometry.name}: write the "
                 "case into another folder (-o DIR/case.toml), or --overwrite replaces it"
@@ -58,10 +59,7 @@ def write_template(name: str, out: Path, overwrite: bool = False) -> list[Path]:
     )
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(header + text, encoding="utf-8")
-    written = [out]
-    for geometry, target in copies.values():
-        if not _same_bytes(geometry, target):
-            target.parent.mkdir(exist_ok=True)
-            shutil.copyfile(geometry, target)
-            written.append(target)
-    return written
+    for geometry, target in to_copy:
+        target.parent.mkdir(exist_ok=True)
+        shutil.copyfile(geometry, target)
+    return [out, *(t for _, t in to_copy)]

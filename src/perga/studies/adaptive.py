@@ -7,23 +7,23 @@ window when its mean ``released_fraction`` ≥ the release target and its mean
 coarse grid first (every ``coarse``-th value of each axis, both ends included); then, in rounds,
 a batch of runs at the dense grid's cells whose classification is most ambiguous.
 
-Per metric a Gaussian process (Rasmussen & Williams 2006, ch. 2, 4-5: c·Matérn 5/2 with a
-length per axis plus white noise for the seed scatter, hyperparameters by maximum marginal
-likelihood, scikit-learn's ``GaussianProcessRegressor``) is fitted to the runs so far, the axes
-scaled to [0, 1]; its latent (noise-free) mean μ and sd σ at each dense cell give the
-probability the cell is inside, P = Φ((μ_r − target)/σ_r) · Φ((limit − μ_d)/σ_d), the two
+Per metric a Gaussian process (Rasmussen & Williams 2006, ch. 2, 4-5: c·Matérn 5/2 with a length
+per axis plus white noise for the seed scatter, hyperparameters by maximum marginal likelihood:
+the calibration surrogate's :func:`~perga.studies.surrogate.fit_gp`) is fitted to the runs so
+far, the axes scaled to [0, 1]; its latent (noise-free) mean μ and sd σ at each dense cell give
+the probability the cell is inside, P = Φ((μ_r − target)/σ_r) · Φ((limit − μ_d)/σ_d), the two
 metrics taken as independent. The next batch goes where the straddle is largest (Bryan,
 Schneider, Nichol, Miller, Genovese & Wasserman, "Active learning for identifying function
-threshold boundaries", NIPS 2005): for one threshold t, 1.96σ − |μ − t| = min(U, −L) with
-U = μ + 1.96σ − t and L = μ − 1.96σ − t, positive where the 95 % band straddles t and the
-larger the farther it reaches past t on its shorter side. Inside-ness is the level set
-min(m_r, m_d) ≥ 0 of the margins m_r = release − target and m_d = limit − damage (both -), so
-U and L are taken as the minima over the two margins of their bands' upper and of their lower
-ends: the joint classification's straddle, which is the one metric's wherever the other
-clearly passes (and ≤ 0 wherever the other clearly fails). A batch is picked greedily: after
-each pick each GP's covariance is updated as if that run were done (a GP's variance does not
-depend on the values; the mean is kept), so a batch spreads along the boundary instead of
-stacking on one cell; a cell is picked twice in one batch only when no other cell is open.
+threshold boundaries", NIPS 2005): for one threshold t, 1.96σ − |μ − t| = min(U, −L) with U = μ
++ 1.96σ − t and L = μ − 1.96σ − t, positive where the 95 % band straddles t and the larger the
+farther it reaches past t on its shorter side. Inside-ness is the level set min(m_r, m_d) ≥ 0 of
+the margins m_r = release − target and m_d = limit − damage (both -), so U and L are taken as
+the minima over the two margins of their bands' upper and of their lower ends: the joint
+classification's straddle, which is the one metric's wherever the other clearly passes (and ≤ 0
+wherever the other clearly fails). A batch is picked greedily: after each pick each GP's
+covariance is updated as if that run were done (a GP's variance does not depend on the values;
+the mean is kept), so a batch spreads along the boundary instead of stacking on one cell; a cell
+is picked twice in one batch only when no other cell is open.
 
 A cell is open while its P is in (``tolerance``, 1 − ``tolerance``) (unsettled), or while it is
 on the predicted boundary (its class differs from a neighbour's) and has not been run: the GP's
@@ -36,7 +36,6 @@ spent ("budget"). A cell is classified inside when P ≥ 0.5.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -45,6 +44,7 @@ import numpy as np
 from scipy.special import ndtr
 from threadpoolctl import threadpool_limits
 
+from perga.studies.surrogate import GpBounds, fit_gp
 from perga.studies.window import DAMAGE, RELEASE
 
 Evaluate = Callable[[list[tuple[float, float]]], list[dict[str, float]]]
@@ -154,28 +154,21 @@ class _Posterior:
         return _Posterior(self.mean, covariance, self.noise)
 
 
+WINDOW_BOUNDS = GpBounds(amplitude=(1e-3, 1e3), length=(5e-2, 1e1), noise=(1e-6, 1.0),
+                         noise_start=1e-2)  # fmt: skip
+"""The GPs' hyperparameter ranges: the seeds' scatter of a window's metrics is real noise, up to
+the metric's own variance."""
+
+
 def _fit(x: np.ndarray, values: np.ndarray, cells: np.ndarray, seed: int) -> _Posterior:
     """The GP of ``values`` (nan left out) at the runs' scaled settings ``x`` (runs, 2),
-    predicted at the scaled ``cells`` (cells, 2): hyperparameters by maximum marginal
-    likelihood on the values normalised to mean 0 and sd 1 (one restart)."""
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.gaussian_process import GaussianProcessRegressor
-    from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
-
+    predicted at the scaled ``cells`` (cells, 2) (:func:`perga.studies.surrogate.fit_gp`)."""
     ok = np.isfinite(values)
-    offset, scale = float(values[ok].mean()), float(values[ok].std()) or 1.0
-    kernel = ConstantKernel(1.0, (1e-3, 1e3)) * Matern(
-        length_scale=np.full(2, 0.5), length_scale_bounds=(5e-2, 1e1), nu=2.5
-    ) + WhiteKernel(1e-2, (1e-6, 1.0))
-    gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=1, random_state=seed)
     # one BLAS thread: on matrices this small more only contend (and the workers share cores)
-    with threadpool_limits(1, user_api="blas"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)  # a length at its bound: flat
-        gp.fit(x[ok], (values[ok] - offset) / scale)
-        mean, covariance = gp.predict(cells, return_cov=True)
-    noise = float(gp.kernel_.k2.noise_level)
-    latent = covariance - noise * np.eye(len(cells))  # the prediction's is a new run's
-    return _Posterior(offset + scale * mean, scale**2 * latent, scale**2 * noise)
+    with threadpool_limits(1, user_api="blas"):
+        gp = fit_gp(x[ok], values[ok], seed, WINDOW_BOUNDS)
+        mean, covariance = gp.latent(cells)
+    return _Posterior(mean, covariance, gp.run_noise)
 
 
 def _margins(

@@ -40,14 +40,27 @@ Cheap = Callable[[np.ndarray], np.ndarray]
 """A cheap model of the simulated metrics: vectors (n, keys) -> values (n, rows, metrics)."""
 
 
-def _kernel(keys: int):
+@dataclass(frozen=True)
+class GpBounds:
+    """The ranges scikit-learn searches for the kernel's hyperparameters (on values normalised
+    to mean 0 and sd 1, inputs scaled to [0, 1]) and the noise it starts from. The default suits
+    a calibration's surrogate, whose runs' scatter is small; a metric with seed scatter (the
+    operating window) wants a larger noise."""
+
+    amplitude: tuple[float, float] = (1e-4, 1e4)
+    length: tuple[float, float] = (1e-2, 1e2)
+    noise: tuple[float, float] = (1e-10, 1e-1)
+    noise_start: float = 1e-6
+
+
+def _kernel(keys: int, bounds: GpBounds):
     """The kernel whose hyperparameters scikit-learn fits: c·Matérn 5/2 (a length per key) plus
-    white noise, on values normalised to mean 0 and sd 1."""
+    white noise, within ``bounds``."""
     from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 
-    return ConstantKernel(1.0, (1e-4, 1e4)) * Matern(
-        length_scale=np.full(keys, 0.5), length_scale_bounds=(1e-2, 1e2), nu=2.5
-    ) + WhiteKernel(1e-6, (1e-10, 1e-1))
+    return ConstantKernel(1.0, bounds.amplitude) * Matern(
+        length_scale=np.full(keys, 0.5), length_scale_bounds=bounds.length, nu=2.5
+    ) + WhiteKernel(bounds.noise_start, bounds.noise)
 
 
 @dataclass(frozen=True)
@@ -87,6 +100,20 @@ class Gp:
         variance = np.clip(self.amplitude + self.noise - np.sum(v**2, axis=1), 0.0, None)
         return self.offset + self.scale * (cross @ alpha), self.scale * np.sqrt(variance)
 
+    def latent(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mean and covariance of the noise-free values at the scaled vectors ``x`` (in the
+        values' units; a new run's variance adds :attr:`run_noise`)."""
+        inverse, alpha = self._solved
+        cross = self.covariance(x, self.x)
+        v = cross @ inverse.T
+        covariance = self.covariance(x, x) - v @ v.T
+        return self.offset + self.scale * (cross @ alpha), self.scale**2 * covariance
+
+    @property
+    def run_noise(self) -> float:
+        """A run's noise variance, in the values' units squared."""
+        return self.scale**2 * self.noise
+
     def with_points(self, x: np.ndarray) -> Gp:
         """This GP after runs at ``x`` that gave its own means there (hyperparameters kept)."""
         mean, _ = self.predict(x)
@@ -95,14 +122,16 @@ class Gp:
                   self.offset, self.scale)  # fmt: skip
 
 
-def _fit_gp(x: np.ndarray, values: np.ndarray, seed: int) -> Gp:
-    """Hyperparameters by maximum marginal likelihood (scikit-learn, one restart)."""
+def fit_gp(x: np.ndarray, values: np.ndarray, seed: int, bounds: GpBounds | None = None) -> Gp:
+    """The GP of ``values`` at the scaled vectors ``x``: hyperparameters by maximum marginal
+    likelihood within ``bounds`` (default :class:`GpBounds`; scikit-learn, one restart)."""
     from sklearn.exceptions import ConvergenceWarning
     from sklearn.gaussian_process import GaussianProcessRegressor
 
     offset, scale = float(values.mean()), float(values.std()) or 1.0
     y = (values - offset) / scale
-    gp = GaussianProcessRegressor(_kernel(x.shape[1]), n_restarts_optimizer=1, random_state=seed)
+    kernel = _kernel(x.shape[1], bounds or GpBounds())
+    gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=1, random_state=seed)
     with warnings.catch_warnings():  # a length at its bound: the metric is flat along it
         warnings.simplefilter("ignore", ConvergenceWarning)
         kernel = gp.fit(x, y).kernel_
@@ -163,7 +192,7 @@ def fit_surrogate(
     gps: list[Gp | None] = []
     for column in target.T:
         ok = np.isfinite(column)
-        gps.append(_fit_gp(x[ok], column[ok], seed) if ok.sum() >= 2 else None)
+        gps.append(fit_gp(x[ok], column[ok], seed) if ok.sum() >= 2 else None)
     return Surrogate(low, high, simulated.shape[1:], gps, cheap)
 
 

@@ -28,6 +28,7 @@ from perga.studies.design import points
 from perga.studies.executor import Progress, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job
 from perga.studies.study_file import Study
+from perga.studies.user_units import si_label
 
 RESULTS = "results.parquet"
 
@@ -68,10 +69,9 @@ def write_table(rows: list[dict[str, Any]], path: Path) -> None:
 def unit_header(column: str) -> str:
     """A results column's CSV header: a metric's name with its unit (``throughput [kg/s]``,
     ``released_fraction [-]``), ``wall_time [s]``; any other column as it is."""
-    metric = METRICS.get(column.split(":", 1)[0])
-    if metric is not None:
-        return f"{column} [{metric.unit}]"
-    return "wall_time [s]" if column == "wall_time" else column
+    if column == "wall_time":
+        return "wall_time [s]"
+    return si_label(column) if column.split(":", 1)[0] in METRICS else column
 
 
 def read_table(path: Path) -> dict[str, list[Any]]:

@@ -43,10 +43,14 @@ def axis_label(key: str) -> tuple[str, float]:
     return f"{key} [{SI_UNITS.get(key.rsplit('.', 1)[-1], 'SI')}]", 1.0
 
 
+def si_label(metric: str) -> str:
+    """A metric's name with its SI unit (:data:`perga.stats.metrics.METRICS`; "SI" for a name
+    that is no metric): ``throughput [kg/s]``."""
+    known = METRICS.get(metric.split(":", 1)[0])
+    return f"{metric} [{known.unit if known else 'SI'}]"
+
+
 def metric_label(metric: str) -> tuple[str, float]:
     """A metric's label and factor from SI; a metric not listed keeps its name and its SI unit
-    (:data:`perga.stats.metrics.METRICS`; "SI" for a name that is no metric)."""
-    if metric in METRIC_UNITS:
-        return METRIC_UNITS[metric]
-    known = METRICS.get(metric.split(":", 1)[0])
-    return f"{metric} [{known.unit if known else 'SI'}]", 1.0
+    (:func:`si_label`)."""
+    return METRIC_UNITS.get(metric, (si_label(metric), 1.0))
