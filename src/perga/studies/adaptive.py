@@ -185,7 +185,9 @@ def _probability(margins: tuple[tuple[np.ndarray, np.ndarray], ...]) -> np.ndarr
     """P(every margin ≥ 0), the margins normal and independent."""
     p = np.ones_like(margins[0][0])
     for m, s in margins:
-        z = np.divide(m, s, out=np.sign(m) * np.inf, where=s > 0)
+        # a margin known exactly (s = 0): ±inf by its sign, 0 (P = ½) on the threshold itself
+        sure = np.where(m > 0, np.inf, np.where(m < 0, -np.inf, 0.0))
+        z = np.divide(m, s, out=sure, where=s > 0)
         p = p * ndtr(np.nan_to_num(z, nan=0.0))
     return p
 
