@@ -1,5 +1,6 @@
 """perga report: a person's path from an empty folder (issue 16's must-show), and a report of a
-run that did not record everything, which says what is missing."""
+run that did not record everything, which says what is missing; report.html beside report.md
+holds its figures and tables (tests/html_pages.py)."""
 
 import matplotlib.image as mpimg
 import numpy as np
@@ -8,6 +9,7 @@ from perga.cli import main
 from perga.stats.metrics import evaluate
 from perga.stats.tables import load_run
 from tests.figure_data import bar_heights, lines, saved_figures
+from tests.html_pages import assert_self_contained
 
 
 def _coloured(png) -> int:
@@ -28,6 +30,8 @@ def test_new_run_report_from_an_empty_folder(tmp_path, monkeypatch, capsys):
     for name in ("energy", "speeds", "impacts", "paths"):
         assert f"![{name}]({name}.png)" in report
         assert _coloured(tmp_path / "runs" / "x" / "report" / f"{name}.png") > 100, name
+    page = assert_self_contained(tmp_path / "runs" / "x" / "report" / "report.md")
+    assert len(page.images) == 4 and page.tables == 1
 
 
 def test_a_report_says_what_the_run_did_not_record(tmp_path, monkeypatch):
@@ -90,11 +94,16 @@ def test_the_report_of_a_process_run_shows_the_process(tmp_path, monkeypatch):
     run = load_run(tmp_path / "runs" / "x")
     section = report[report.index("## Process") :]
     for key, count in run.summary["population"].items():
-        assert f"| {key.replace('_', ' ')} | {count} |" in section
+        assert f"| {key.replace('_', ' ')} | {count} | granules |" in section
     assert run.summary["population"]["fed"] > run.summary["granules"]  # a feed came in
     released = evaluate(run, "released_fraction")
-    assert f"| released [%] | {released * 100:.4g} |" in section
+    assert (
+        f"| released [%] | {released * 100:.4g} | share of the granules held in comb cells at t = 0"
+        in section
+    )
     assert "| damaged [%] | " in section and "| throughput [kg/h] | " in section
     assert "| energy [kJ/kg] | " in section
     assert "![process](process.png)" in section
     assert _coloured(tmp_path / "runs" / "x" / "report" / "process.png") > 100
+    page = assert_self_contained(tmp_path / "runs" / "x" / "report" / "report.md")
+    assert len(page.images) == 5 and page.tables == 2

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -25,6 +26,7 @@ class RunSummary:
     """What summary.json holds (SI units)."""
 
     case: str
+    """The case file run; summary.json names it from the run directory (:func:`path_from`)."""
     overrides: list[str] = field(default_factory=list)
     started_from: str = ""
     """The run and time whose granules this run started from (perga run --from), if any."""
@@ -137,10 +139,20 @@ def finite_or_null(value: object) -> object:
     return value
 
 
+def path_from(directory: Path, path: str | Path) -> str:
+    """``path`` as seen from ``directory``, so that the two can move together: relative (``/``
+    between parts), or the file's name where no relative path leads to it (another drive)."""
+    try:
+        return Path(os.path.relpath(Path(path).resolve(), directory.resolve())).as_posix()
+    except ValueError:
+        return Path(path).name
+
+
 def write_summary(summary: RunSummary, directory: Path) -> None:
-    """``directory``/summary.json: strict JSON (non-finite floats as null), written whole to a
-    temporary file and renamed over the old one."""
-    data = finite_or_null(asdict(summary))
+    """``directory``/summary.json: strict JSON (non-finite floats as null), the case named
+    from ``directory`` (:func:`path_from`), written whole to a temporary file and renamed over
+    the old one."""
+    data = finite_or_null(asdict(summary) | {"case": path_from(directory, summary.case)})
     text = json.dumps(data, indent=2, allow_nan=False, ensure_ascii=False) + "\n"
     temporary = directory / ".summary.json.tmp"
     temporary.write_text(text, encoding="utf-8")

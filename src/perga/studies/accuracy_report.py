@@ -1,5 +1,6 @@
-"""Output of ``perga accuracy``: the table (CSV and Markdown), the recommended settings, and
-one log-log work-precision plot per reference (matplotlib)."""
+"""Output of ``perga accuracy``: the table (CSV and Markdown, with the Markdown as one
+self-contained HTML page), the recommended settings, and one log-log work-precision plot per
+reference (matplotlib)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from pathlib import Path
 
 from perga.contact.laws import LAWS
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
 from perga.studies.accuracy import LEVELS, REFERENCES, Row, StudyResult, recommend
 
 ERROR_FLOOR = 1e-16
@@ -40,11 +42,14 @@ def _cost(row: Row) -> str:
 
 
 def markdown_table(rows: Sequence[Row]) -> str:
-    """One Markdown table per reference: setting, steps, error, wall s per simulated s."""
+    """One Markdown table per reference (setting, steps, error, wall s per simulated s) under
+    its figure (``REFERENCE.png``, :func:`plot_reference`)."""
     out = []
     for reference in dict.fromkeys(r.reference for r in rows):
         out += [
             f"### {reference}: {REFERENCES.get(reference, '')}",
+            "",
+            f"![{reference}]({reference}.png)",
             "",
             "| model | setting | granule dt, s | Pymunk dt, s | dt/t_c | error | "
             "wall s per simulated s | steps |",
@@ -140,13 +145,13 @@ def plot_reference(rows: Sequence[Row], reference: str, path: Path) -> None:
 
 
 def write_outputs(result: StudyResult, directory: Path) -> list[Path]:
-    """accuracy.csv, accuracy.md and one PNG per reference into ``directory``."""
+    """accuracy.csv, one PNG per reference, accuracy.md and accuracy.html into ``directory``."""
     directory.mkdir(parents=True, exist_ok=True)
-    paths = [directory / "accuracy.csv", directory / "accuracy.md"]
+    paths = [directory / "accuracy.csv"]
     write_csv(result.rows, paths[0])
-    paths[1].write_text(markdown_report(result), encoding="utf-8")
     for reference in dict.fromkeys(r.reference for r in result.rows):
         path = directory / f"{reference}.png"
         plot_reference(result.rows, reference, path)
         paths.append(path)
-    return paths
+    report = directory / "accuracy.md"
+    return [*paths, report, write_markdown_report(report, markdown_report(result))]

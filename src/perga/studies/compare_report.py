@@ -1,4 +1,5 @@
-"""The ``perga compare`` report: Markdown with PNG figures (matplotlib, no pyplot) and JSON.
+"""The ``perga compare`` report: Markdown with PNG figures (matplotlib, no pyplot), the same as
+one self-contained HTML page, and JSON.
 
 Figures follow the paper's numbering: Fig. 2 (trajectory in the fixed frame, time-coloured),
 Fig. 3 (v_max over ω and f), Fig. 4a (efficiency against hammer mass), Fig. 4b (X, Y, r against
@@ -18,6 +19,7 @@ import numpy as np
 
 from perga.analytic.impact import impact_efficiencies
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
 from perga.stats.impact_law import ISOLATED
 from perga.stats.slide_law import ON_FACE
 from perga.studies.compare_episodes import (
@@ -304,7 +306,7 @@ def _shown_above(rows: list[Row], shown: set[str]) -> str:
 def write_report(
     analyses: list[Analysis], out: Path, paper: Params | None = None, command: str = ""
 ) -> dict[str, object]:
-    """Write OUT/report.md, OUT/report.json and OUT/figures/*.png; returns the JSON data."""
+    """Write OUT/report.md, report.html, report.json and figures/*.png; returns the JSON data."""
     figures_dir = out / "figures"
     figures_dir.mkdir(parents=True, exist_ok=True)
     rows = [r for a in analyses for r in a.rows]
@@ -361,7 +363,7 @@ def write_report(
         lines += ["## Not computed, and why", "", "| run | statistic | reason |", "|---|---|---|"]
         lines += [f"| {u.run} | {u.statistic} | {u.reason} |" for u in unavailable]
         lines.append("")
-    (out / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    write_markdown_report(out / "report.md", "\n".join(lines))
     data = {
         "command": command,
         "figures": {k: str(p.relative_to(out)) for k, (_, p) in written.items()},

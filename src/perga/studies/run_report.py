@@ -1,9 +1,9 @@
-"""``perga report RUN``: one run as a Markdown page with figures (``RUN/report/``): how it ended,
-what it holds, and plots of the energy ledger's terms over time, the granules' speeds at the
-first and last frame, the impacts over time and the granules' paths (``perga render``'s); for
-a process run (comb, feed, damage or outlet) its population, the process metrics in the
-designer's units and the process figure (``perga render --process``'s). A figure or metric the
-run's tables cannot give is left out with the reason."""
+"""``perga report RUN``: one run as a Markdown page with figures, and as one self-contained HTML
+page (``RUN/report/``): how it ended, what it holds, and plots of the energy ledger's terms over
+time, the granules' speeds at the first and last frame, the impacts over time and the granules'
+paths (``perga render``'s); for a process run (comb, feed, damage or outlet) its population, the
+process metrics in the designer's units and the process figure (``perga render --process``'s).
+A figure or metric the run's tables cannot give is left out with the reason."""
 
 from __future__ import annotations
 
@@ -12,10 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
 from perga.output.process_figure import process_figure
 from perga.output.render import render
-from perga.run.summary import ledger_closure_text
-from perga.stats.metrics import MetricUnavailableError, evaluate
+from perga.run.summary import ledger_closure_text, path_from
+from perga.stats.metrics import METRICS, MetricUnavailableError, evaluate
 from perga.stats.tables import Run, load_run
 from perga.studies.user_units import metric_label
 
@@ -91,16 +92,16 @@ def _paths(run: Run, out: Path) -> str:
 def _process(run: Run, out: Path) -> list[str]:
     """The process section: the population, each process metric (or why the run cannot give
     it) and the process figure."""
-    lines = ["| | |", "| --- | --- |"]
+    lines = ["| | | |", "| --- | --- | --- |"]
     for key, count in run.summary["population"].items():
-        lines.append(f"| {key.replace('_', ' ')} | {count} |")
+        lines.append(f"| {key.replace('_', ' ')} | {count} | granules |")
     for name in PROCESS_METRICS:
         label, factor = metric_label(name)
         try:
             value = f"{evaluate(run, name) * factor:.4g}"
         except MetricUnavailableError as exc:
             value = f"n/a: {exc}"
-        lines.append(f"| {label} | {value} |")
+        lines.append(f"| {label} | {value} | {METRICS[name].description} |")
     if not run.granules:
         return [*lines, "", "no process figure: granules.csv was not recorded"]
     process_figure(run.directory, out / "process.png")
@@ -117,8 +118,8 @@ def _closure(energy: dict) -> str:
 
 
 def write_run_report(directory: Path, out: Path | None = None) -> Path:
-    """Write the report of the run in ``directory`` to ``out`` (default ``RUN/report``);
-    returns the path of report.md."""
+    """Write the report of the run in ``directory`` to ``out`` (default ``RUN/report``):
+    report.md, its figures and report.html; returns the path of report.md."""
     run = load_run(directory)
     out = out or directory / "report"
     out.mkdir(parents=True, exist_ok=True)
@@ -135,7 +136,9 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
     if s.get("speeds"):
         rows.append(("granule speeds at the end", f"{s['speeds']['mean']:.3g} m/s mean, "
                                                   f"{s['speeds']['max']:.3g} m/s max"))  # fmt: skip
-    lines = [f"# Run {run.name}", "", f"Case: `{s.get('case')}`", "", "| | |", "| --- | --- |"]
+    case = path_from(directory, directory / s["case"])  # older runs named it absolute
+    lines = [f"# Run {run.name}", "", f"Case: `{case}` (from the run directory)", "", "| | |",
+             "| --- | --- |"]  # fmt: skip
     lines += [f"| {k} | {v} |" for k, v in rows]
     for warning in s.get("warnings") or []:
         lines += ["", f"Warning: {warning}"]
@@ -149,5 +152,5 @@ def write_run_report(directory: Path, out: Path | None = None) -> Path:
     if (directory / "vtk" / "granules.pvd").exists():
         lines += ["", "ParaView: `paraview --state=vtk/paraview_state.py` (or File > Load State)."]
     path = out / "report.md"
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    write_markdown_report(path, "\n".join(lines) + "\n")
     return path

@@ -1,8 +1,8 @@
 """An adaptive window study's files: ``adaptive.parquet`` and ``adaptive.csv`` (per setting of
 the grid: the probability of being inside, its class, the runs made there and each metric's
 predicted mean and sd, SI), ``adaptive.png`` (the probability over the grid, the 0.5 contour,
-the runs as dots sized by their count) and ``adaptive.md`` (the search, the window it found,
-what the map rests on)."""
+the runs as dots sized by their count) and ``adaptive.md`` (the search, the map, the window it
+found, what the map rests on), with ``adaptive.html`` (the same, one self-contained page)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,8 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
+from perga.run.summary import path_from
 from perga.studies.user_units import axis_label, metric_label
 from perga.studies.window import DAMAGE, RELEASE, foundations
 from perga.studies.window_report import cell_edges
@@ -25,7 +27,8 @@ if TYPE_CHECKING:
 
 
 def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
-    """The table, the map and the report (module doc) into ``directory``."""
+    """The table, the map and the report, Markdown and HTML (module doc), into
+    ``directory``."""
     search, window = result.search, result.window
     a, b = window.axes
     grid_x, grid_y = np.meshgrid(search.xs, search.ys)
@@ -69,7 +72,8 @@ def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
     lines = [
         "# Operating window, found adaptively",
         "",
-        f"Case `{Path(window.study.case).name}`; window: {rl} ≥ {100 * window.release_target:g} "
+        f"Case `{path_from(directory, window.study.case)}`; "
+        f"window: {rl} ≥ {100 * window.release_target:g} "
         f"and {df} ≤ {100 * window.damage_limit:g}; grid {len(search.xs)} × {len(search.ys)} "
         f"({xl} {ux.min():.4g}-{ux.max():.4g}; {yl} {uy.min():.4g}-{uy.max():.4g}).",
         "",
@@ -78,6 +82,8 @@ def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
         f"- settings in the window (P ≥ 0.5): {int(search.inside.sum())} of "
         f"{search.inside.size}; unsure (0.1 < P < 0.9): "
         f"{int(np.count_nonzero((search.probability > 0.1) & (search.probability < 0.9)))}",
+        "",
+        "![adaptive](adaptive.png)",
         "",
         "## What the map rests on",
         "",
@@ -88,4 +94,4 @@ def write_adaptive(result: AdaptiveWindow, directory: Path) -> None:
         "Files: adaptive.parquet, adaptive.csv, adaptive.png, adaptive-runs.parquet, runs/.",
         "",
     ]
-    (directory / "adaptive.md").write_text("\n".join(lines), encoding="utf-8")
+    write_markdown_report(directory / "adaptive.md", "\n".join(lines))

@@ -1,8 +1,9 @@
 """The window under a calibration's uncertainty, drawn and reported: ``odds.png`` (the
 probability that each setting is inside the window, contours at 0.5 and 0.9), ``odds.parquet``
 and ``odds.csv`` (per setting: probability, its interval, each metric's mean and variance
-split), and ``report.md`` (the setting with the highest probability and that probability, what
-is calibrated and what is assumed, the variance split)."""
+split), and ``report.md`` (the setting with the highest probability and that probability, the
+map, what is calibrated and what is assumed, the variance split), with ``report.html`` (the
+same, one self-contained page)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
 from perga.studies.user_units import axis_label, metric_label
 from perga.studies.window import DAMAGE, METRICS, RELEASE
 from perga.studies.window_report import cell_edges
@@ -140,6 +142,8 @@ def odds_report(result: OddsResult, assumed: list[str], numerics: list[str]) -> 
         )
     lines += [
         "",
+        "![odds](odds.png)",
+        "",
         "## Every setting",
         "",
         "Each metric's mean over the runs, and the sd of its per-run value split into the "
@@ -161,7 +165,8 @@ def odds_report(result: OddsResult, assumed: list[str], numerics: list[str]) -> 
 def write_odds_report(
     result: OddsResult, assumed: list[str], numerics: list[str], directory: Path
 ) -> Path:
-    """``DIR/report.md`` (:func:`odds_report`)."""
+    """``DIR/report.md`` (:func:`odds_report`) and report.html, after odds.png
+    (:func:`write_odds_map`)."""
     path = directory / "report.md"
-    path.write_text(odds_report(result, assumed, numerics), encoding="utf-8")
+    write_markdown_report(path, odds_report(result, assumed, numerics))
     return path

@@ -1,6 +1,7 @@
 """The window study's maps (``window.png``: one panel per metric over the two keys, the operating
 window hatched; ``trade-offs.png``: the Pareto front) and report (``report.md``: the grid, the
-best setting, how sure, the trade-offs, the trends), in the user's units
+best setting, how sure, the trade-offs, the trends; ``report.html``: the same with the figures,
+one self-contained page), in the user's units
 (:mod:`perga.studies.user_units`)."""
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import numpy as np
 from matplotlib.patches import Rectangle
 
 from perga.output.figures import new_figure, save
+from perga.output.html_report import write_markdown_report
+from perga.run.summary import path_from
 from perga.studies.user_units import axis_label, metric_label
 from perga.studies.window import (
     DAMAGE,
@@ -151,8 +154,9 @@ def _trend_line(t: Trend, speed: str, other: str, *, rising: bool) -> str:
     )
 
 
-def report_text(result: WindowResult) -> str:
-    """The Markdown report of a window study."""
+def report_text(result: WindowResult, directory: Path) -> str:
+    """The Markdown report of a window study, written in ``directory`` (the case is named from
+    there)."""
     window = result.window
     study = window.study
     rt, dl = window.release_target, window.damage_limit
@@ -163,7 +167,8 @@ def report_text(result: WindowResult) -> str:
     lines = [
         "# Operating window",
         "",
-        f"Case `{study.case}`; window: {RELEASE} ≥ {rt:g} and {DAMAGE} ≤ {dl:g}.",
+        f"Case `{path_from(directory, study.case)}`; "
+        f"window: {RELEASE} ≥ {rt:g} and {DAMAGE} ≤ {dl:g}.",
         "",
         "## Grid",
         "",
@@ -186,7 +191,17 @@ def report_text(result: WindowResult) -> str:
         mark = "*" if in_window(p, rt, dl) else ""
         cells = " | ".join(_pm(p, m) for m in METRICS)
         lines.append(f"| {p.x * af:.6g} | {p.y * bf:.6g} | {cells} | {mark} |")
-    lines += ["", "## What the map rests on", "", *result.foundations, "", "## Best setting", ""]
+    lines += [
+        "",
+        "![window](window.png)",
+        "",
+        "## What the map rests on",
+        "",
+        *result.foundations,
+        "",
+        "## Best setting",
+        "",
+    ]
     best = result.best
     if best.point is None:
         lines.append("No point gave both a release and a damage fraction: no setting to name.")
@@ -240,6 +255,8 @@ def report_text(result: WindowResult) -> str:
         "The settings no other beats on all of throughput (more), damage and energy per kg "
         "(less), the Pareto front (trade-offs.png): a designer trades among these.",
         "",
+        "![trade-offs](trade-offs.png)",
+        "",
         f"| setting | {metric_label(THROUGHPUT)[0]} | {metric_label(DAMAGE)[0]} | "
         f"{metric_label(ENERGY)[0]} | in |",
         "|---|---|---|---|---|",
@@ -282,7 +299,8 @@ def report_text(result: WindowResult) -> str:
 
 
 def write_report(result: WindowResult, directory: Path) -> Path:
-    """``DIR/report.md`` (:func:`report_text`)."""
+    """``DIR/report.md`` (:func:`report_text`) and report.html, after window.png and
+    trade-offs.png (:func:`write_maps`, :func:`write_trade_offs`)."""
     path = directory / "report.md"
-    path.write_text(report_text(result), encoding="utf-8")
+    write_markdown_report(path, report_text(result, directory))
     return path
