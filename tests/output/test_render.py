@@ -4,9 +4,10 @@ from pathlib import Path
 
 import matplotlib.image as mpimg
 import numpy as np
+import pytest
 
 from perga.cli import main
-from perga.output.render import render, speed_range
+from perga.output.render import TRACKS, draw, render, sample_tracks, speed_range
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -64,3 +65,49 @@ def test_cli_writes_the_preview_and_refuses_a_missing_table(tmp_path, capsys):
     (run / "hammers.csv").unlink()
     assert main(["render", str(run)]) == 2
     assert "hammers.csv: missing" in capsys.readouterr().err
+
+
+def _track_ends(fig) -> int:
+    """The granule paths drawn: one dot where each ends (gid "track ends")."""
+    (ends,) = [c for c in fig.axes[0].collections if c.get_gid() == "track ends"]
+    return len(ends.get_offsets())
+
+
+def test_a_one_granule_run_draws_its_track(tmp_path):
+    """Asked for the default handful of paths, a run of one granule draws that one."""
+    fig, _ = draw(_run(tmp_path), trajectories=True)
+    assert TRACKS > 1 and _track_ends(fig) == 1
+
+
+def test_trajectories_draw_as_many_tracks_as_asked(tmp_path):
+    """Of the separator's 300 granules (its first 10 ms, before any impact: spread by id) the
+    paths drawn are as many as asked, and never more than the granules."""
+    case = str(ROOT / "cases" / "separator.toml")
+    out = tmp_path / "sep"
+    sets = ["solver.duration=0.01", "output.checkpoint_every=0",
+            'output.record=["granules", "hammers", "impacts"]']  # fmt: skip
+    overrides = [a for s in sets for a in ("--set", s)]
+    assert main(["run", case, "-o", str(out), "--quiet", *overrides]) == 0
+    for tracks in (1, 3, 8):
+        fig, _ = draw(out, trajectories=True, tracks=tracks)
+        assert _track_ends(fig) == tracks
+    fig, _ = draw(out, trajectories=True, tracks=1000)
+    assert _track_ends(fig) == 300
+    assert main(["render", str(out), "--trajectories", "--tracks", "1"]) == 0
+    with pytest.raises(SystemExit) as refused:
+        main(["render", str(out), "--trajectories", "--tracks", "0"])
+    assert refused.value.code == 2
+
+
+def test_tracks_are_the_granules_most_struck_else_spread_by_id():
+    """The granules with the most impacts first, ties by id; without impacts, ids evenly
+    spread from the first to the last; a count below 1 is refused."""
+    ids = np.arange(10, 20)
+    impacts = np.zeros(6, dtype=[("granule", float)])
+    impacts["granule"] = [15, 15, 15, 12, 12, 17]
+    assert sample_tracks(ids, impacts, 2).tolist() == [12, 15]
+    assert sample_tracks(ids, impacts, 4).tolist() == [10, 12, 15, 17]
+    assert sample_tracks(ids, impacts[:0], 3).tolist() == [10, 14, 19]
+    assert sample_tracks(ids, None, 30).tolist() == ids.tolist()
+    with pytest.raises(ValueError, match="tracks must be >= 1"):
+        sample_tracks(ids, None, 0)

@@ -883,6 +883,14 @@ class Output(Strict):
         "faster to write and to read (docs/dev/performance.md); parts are written when "
         "full and at the end, so a killed run loses the part in memory; perga.output.tables)",
     )
+    tables: Literal["csv", "parquet"] = Field(
+        "csv",
+        description="form of the tables once the run is complete: 'csv', or 'parquet' (each "
+        "table written at the end as NAME.parquet, one zstd-compressed file, and its CSV "
+        "removed; smaller, typed, the CSV's values exactly). While the run goes, and in a run "
+        "that stopped before its end (which perga run --resume completes), the tables are "
+        "CSV; every reader of a run takes either (perga.output.tables)",
+    )
     checkpoint_every: float = Field(
         0.1,
         ge=0.0,

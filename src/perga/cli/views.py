@@ -6,11 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from perga.cli.common import AddParser, problems
+from perga.cli.common import AddParser, at_least_one, problems
 
 
 def render(args: argparse.Namespace) -> int:
     """A preview, the trajectories or the process figure of a run, as PNG."""
+    from perga.output.render import TRACKS
     from perga.output.render import render as render_run
 
     if args.process:
@@ -26,7 +27,13 @@ def render(args: argparse.Namespace) -> int:
         return 0
     out = args.output or args.run / ("trajectories.png" if args.trajectories else "preview.png")
     try:
-        t = render_run(args.run, out, time=args.time, trajectories=args.trajectories)
+        t = render_run(
+            args.run,
+            out,
+            time=args.time,
+            trajectories=args.trajectories,
+            tracks=args.tracks or TRACKS,
+        )
     except FileNotFoundError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -52,7 +59,14 @@ def add_parsers(add: AddParser) -> None:
     parser = add("render", help="a preview PNG of a run (matplotlib, no OpenGL)")
     parser.add_argument("run", type=Path, metavar="RUN", help="a run directory")
     parser.add_argument("--time", type=float, help="the frame nearest this time, s (default last)")
-    parser.add_argument("--trajectories", action="store_true", help="granule paths, by time")
+    parser.add_argument(
+        "--trajectories", action="store_true",
+        help="the paths of the granules with the most impacts, coloured by speed",
+    )  # fmt: skip
+    parser.add_argument(
+        "--tracks", type=at_least_one,
+        help="how many paths --trajectories draws (default 8)",
+    )  # fmt: skip
     parser.add_argument(
         "--process", action="store_true",
         help="counts, outlet mass flow and survival over time (RUN/process.png)",

@@ -5,7 +5,8 @@ k·every (never "every since the last"), so a run's frames do not drift.
 Each recorder is built with the run directory and the system (:class:`~perga.model.system.
 System`); ``record(frame, events)`` appends a frame, ``events`` being everything the run has
 recorded so far (:class:`~perga.model.records.Events`: impacts, releases, departures). A table
-recorder owns one CSV table.
+recorder owns one CSV table, written as Parquet at the end of a complete run with
+``output.tables = "parquet"``.
 """
 
 from __future__ import annotations
@@ -43,11 +44,19 @@ class Recorder(Protocol):
 class TableRecorder:
     """A recorder that writes one CSV table (``self.table``)."""
 
-    table: Table
+    table: Table | ParquetTable
+    tables: str = "csv"
+    """The table's form once the run is complete: 'csv', or 'parquet' (``NAME.parquet``
+    written at :meth:`close`; a run that stops keeps its CSV, which ``--resume`` appends to)."""
 
     def close(self, complete: bool = True) -> None:
-        """Close the table (idempotent; whole rows only, complete or not)."""
-        self.table.close()
+        """Close the table (idempotent; whole rows only, complete or not); complete, with
+        :attr:`tables` 'parquet', also write its Parquet form (:meth:`~perga.output.tables.
+        Table.write_parquet`)."""
+        if complete and self.tables == "parquet":
+            self.table.write_parquet()
+        else:
+            self.table.close()
 
 
 class PhaseLock:
@@ -91,15 +100,14 @@ class GranuleRecorder(TableRecorder):
     W_min: the k of the master curve). ``table_format`` 'parquet' writes the same columns as
     the Parquet dataset granules.parquet (:class:`~perga.output.tables.ParquetTable`)."""
 
-    table: Table | ParquetTable
-
     def __init__(self, directory: Path, spec: System, table_format: str = "csv") -> None:
         self.held = spec.has_bonds
         self.damage = spec.process.damage is not None
         columns = ["time", "id", "x", "y", "vx", "vy", "angular_velocity", "speed", "radius"]
         columns += ["mass"] + ["held"] * self.held
         columns += ["survival", "broken", "damaging_impacts"] * self.damage
-        self.table = open_table(directory / "granules.csv", columns, table_format)
+        integers = {"id", "held", "broken", "damaging_impacts"} & set(columns)
+        self.table = open_table(directory / "granules.csv", columns, table_format, integers)
 
     def record(self, frame: Frame, events: Events) -> None:
         """Append one frame."""
@@ -131,7 +139,7 @@ class HammerRecorder(TableRecorder):
     columns = ("time", "id", "swing_angle", "angular_velocity", "vx", "vy")
 
     def __init__(self, directory: Path, spec: System) -> None:
-        self.table = Table(directory / "hammers.csv", self.columns)
+        self.table = Table(directory / "hammers.csv", self.columns, integers=("id",))
 
     def record(self, frame: Frame, events: Events) -> None:
         """Append one frame."""
@@ -164,6 +172,11 @@ def record_fields(record: type, omit: frozenset[str] = frozenset()) -> tuple[str
     return tuple(f.name for f in fields(record) if f.name not in omit)
 
 
+def record_integers(record: type) -> frozenset[str]:
+    """A record class's fields of whole numbers (int or bool), which are columns of their own."""
+    return frozenset(f.name for f in fields(record) if f.type in ("int", "bool", int, bool))
+
+
 def record_columns(record: type, omit: frozenset[str] = frozenset()) -> tuple[str, ...]:
     """A record class's fields but ``omit`` as columns, vectors split into components
     (``SPLIT``)."""
@@ -192,7 +205,9 @@ class EventRecorder(TableRecorder):
     def __init__(self, directory: Path, spec: System) -> None:
         self.omit = self.omitted(spec)
         self.names = record_fields(self.record_type, self.omit)
-        self.table = Table(directory / self.file, record_columns(self.record_type, self.omit))
+        columns = record_columns(self.record_type, self.omit)
+        integers = record_integers(self.record_type) & set(columns)
+        self.table = Table(directory / self.file, columns, integers)
         self.written = 0
 
     @staticmethod
@@ -248,13 +263,19 @@ class OutflowRecorder(EventRecorder):
 
 
 class EnergyRecorder(TableRecorder):
-    """energy.csv: the cumulative energy ledger at each frame (J; its closure = residual /
-    energy_in_play, dimensionless)."""
+    """energy.csv: the energy ledger at each frame (:class:`~perga.model.records.
+    EnergyLedger`, J; its closure = residual / energy_in_play, dimensionless): the kinetic
+    energy of every moving body and the elastic energy stored in the soft contacts now (0 with
+    rigid contacts), the other terms cumulative since t = 0, so that a row's residual follows
+    from its terms and the first row's (t = 0) kinetic and elastic energy
+    (:meth:`~perga.model.records.LedgerTerms.close`)."""
 
     columns = (
         "time",
         "kinetic",
+        "elastic",
         "drive_work",
+        "gravity_work",
         "contact_dissipation",
         "friction",
         "drag",
@@ -275,9 +296,9 @@ class EnergyRecorder(TableRecorder):
         if e is None:
             raise ValueError("energy.csv needs frames with the energy ledger (track_energy)")
         self.table.write(
-            [(frame.time, e.kinetic, e.drive_work, e.contact_dissipation, e.friction, e.drag,
-              e.inflow, e.outflow, e.joint_correction, e.residual, e.energy_in_play,
-              e.closure)]
+            [(frame.time, e.kinetic, e.elastic, e.drive_work, e.gravity_work,
+              e.contact_dissipation, e.friction, e.drag, e.inflow, e.outflow,
+              e.joint_correction, e.residual, e.energy_in_play, e.closure)]
         )  # fmt: skip
 
 
@@ -297,11 +318,18 @@ COMPANIONS: dict[str, tuple[type, ...]] = {"impacts": (ContactRecorder,)}
 
 
 def make_recorders(
-    names: Sequence[str], directory: Path, spec: System, granule_table: str = "csv"
+    names: Sequence[str],
+    directory: Path,
+    spec: System,
+    granule_table: str = "csv",
+    tables: str = "csv",
 ) -> list[Recorder]:
     """The recorders ``names`` (keys of :data:`RECORDERS`) and their :data:`COMPANIONS` for a
     run into ``directory``; the granule table in ``granule_table`` format ('csv' or
-    'parquet')."""
+    'parquet') while the run goes, the tables in ``tables`` form once it is complete
+    (:attr:`TableRecorder.tables`)."""
+    if tables not in ("csv", "parquet"):
+        raise ValueError(f"tables must be 'csv' or 'parquet' (got {tables!r})")
     recorders: list[Recorder] = []
     for name in names:
         if name == "granules":
@@ -309,4 +337,7 @@ def make_recorders(
         else:
             recorders.append(RECORDERS[name](directory, spec))
         recorders += [companion(directory, spec) for companion in COMPANIONS.get(name, ())]
+    for recorder in recorders:
+        if isinstance(recorder, TableRecorder):
+            recorder.tables = tables
     return recorders

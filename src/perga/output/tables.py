@@ -1,7 +1,9 @@
 """Run tables: CSV tables that stay readable when a run stops midway (the header is written
 first, every block of rows goes to the file in one write as soon as it is made, and a write that
-fails, as on a full disk, is cut back so that the file ends on a whole row), and, for large runs,
-the granule table as Parquet (:class:`ParquetTable`); :func:`read_columns` reads either.
+fails, as on a full disk, is cut back so that the file ends on a whole row), each written as one
+Parquet file at the end of a run that asks for it (:meth:`Table.write_parquet`), and, for large
+runs, the granule table as a Parquet dataset while the run goes (:class:`ParquetTable`);
+:func:`read_run_table` reads a run's table whichever form it has.
 
 Rows of Python values go through the ``csv`` module (floats as ``repr``); a block given as
 columns of arrays (``write_columns``: a frame of granules) goes through pyarrow's CSV writer,
@@ -72,9 +74,14 @@ class Table(_Closable):
     file-size limit) cuts the file back to the end of the last whole block before the error is
     raised, so the file always ends on a whole row."""
 
-    def __init__(self, path: Path, columns: Sequence[str]) -> None:
+    def __init__(self, path: Path, columns: Sequence[str], integers: Iterable[str] = ()) -> None:
         self.path = path
         self.columns = tuple(columns)
+        self.integers = frozenset(integers)
+        """The columns of whole numbers (int64 in the Parquet form; the rest float64)."""
+        if not self.integers <= set(self.columns):
+            raise ValueError(f"{path.name}: integer columns {sorted(self.integers)} not all in "
+                             f"the header {self.columns}")  # fmt: skip
         self._fd: int | None = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
         self._size = 0
         """Bytes of whole blocks in the file."""
@@ -83,13 +90,19 @@ class Table(_Closable):
 
     def __getstate__(self) -> dict[str, object]:
         """The table as it stands (a checkpoint): its path, header, size and rows."""
-        return {"path": self.path, "columns": self.columns, "_size": self._size, "rows": self.rows}
+        return {
+            "path": self.path, "columns": self.columns, "integers": self.integers,
+            "_size": self._size, "rows": self.rows,
+        }  # fmt: skip
 
     def __setstate__(self, state: dict[str, object]) -> None:
         """Go on appending to the file as it stood at the checkpoint: rows written after it
-        are cut off (OSError if the file is missing or shorter than then)."""
+        are cut off (OSError if the file is missing or shorter than then), and a Parquet form
+        written by an end that did not complete is removed."""
         self.__dict__.update(state)
         self._fd = reopen_at(self.path, self._size)
+        if (stale := self.path.with_suffix(".parquet")).is_file():
+            stale.unlink()
 
     def write(self, rows: Iterable[Sequence[object]]) -> None:
         """Append rows (each as long as the header)."""
@@ -134,6 +147,45 @@ class Table(_Closable):
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
+
+    def write_parquet(self) -> None:
+        """Close the table and write it beside its CSV as ``NAME.parquet``, one file (zstd;
+        :attr:`integers` int64, the other columns float64: the CSV's values exactly), read and
+        written in parts of :data:`PART_ROWS` rows (one row group each), atomically (a
+        temporary file renamed; on an error it is removed and the CSV kept). The CSV stays:
+        :func:`drop_converted` removes it once the run's end is recorded. Nothing to do once the
+        CSV is gone (idempotent)."""
+        self.close()
+        if not self.path.exists():
+            return
+        types = {c: pa.int64() if c in self.integers else pa.float64() for c in self.columns}
+        convert = pacsv.ConvertOptions(column_types=types, null_values=[])  # "nan" is NaN
+        target = self.path.with_suffix(".parquet")
+        temporary = target.with_name(f".{target.name}.tmp")
+        try:
+            with (
+                pacsv.open_csv(self.path, convert_options=convert) as reader,
+                pq.ParquetWriter(temporary, reader.schema, compression="zstd") as writer,
+            ):
+                part: list[pa.RecordBatch] = []
+                for batch in reader:
+                    part.append(batch)
+                    if sum(b.num_rows for b in part) >= PART_ROWS:
+                        writer.write_table(pa.Table.from_batches(part))
+                        part = []
+                writer.write_table(pa.Table.from_batches(part, schema=reader.schema))
+            temporary.replace(target)
+        except BaseException:
+            temporary.unlink(missing_ok=True)
+            raise
+
+
+def drop_converted(directory: Path) -> None:
+    """Remove each ``NAME.csv`` of the run ``directory`` that has its Parquet form, the file
+    ``NAME.parquet`` (:meth:`Table.write_parquet`), once the run's end is recorded."""
+    for csv_path in directory.glob("*.csv"):
+        if csv_path.with_suffix(".parquet").is_file():
+            csv_path.unlink()
 
 
 def _csv_lines(rows: Iterable[Sequence[object]]) -> bytes:
@@ -209,17 +261,22 @@ class ParquetTable(_Closable):
             self._closed = True
             self._write_part()
 
+    def write_parquet(self) -> None:
+        """Close the table: it is Parquet already (:meth:`Table.write_parquet`)."""
+        self.close()
+
 
 def open_table(
-    path: Path, columns: Sequence[str], table_format: str = "csv"
+    path: Path, columns: Sequence[str], table_format: str = "csv", integers: Iterable[str] = ()
 ) -> Table | ParquetTable:
-    """The table ``path`` (``NAME.csv``) in ``table_format``: 'csv' (:class:`Table`) or
-    'parquet' (:class:`ParquetTable` at ``NAME.parquet``)."""
+    """The table ``path`` (``NAME.csv``) in ``table_format``: 'csv' (:class:`Table`, whole
+    numbers in the columns ``integers``) or 'parquet' (:class:`ParquetTable` at
+    ``NAME.parquet``, each column of its arrays' type)."""
     if table_format == "parquet":
         return ParquetTable(path.with_suffix(".parquet"), columns)
     if table_format != "csv":
         raise ValueError(f"table format must be 'csv' or 'parquet' (got {table_format!r})")
-    return Table(path, columns)
+    return Table(path, columns, integers)
 
 
 def table_path(directory: Path, name: str) -> Path | None:
@@ -229,6 +286,18 @@ def table_path(directory: Path, name: str) -> Path | None:
         if path.exists():
             return path
     return None
+
+
+def read_run_table(directory: Path, name: str) -> dict[str, np.ndarray]:
+    """The table ``name`` ('granules', 'impacts', ...) of the run ``directory`` as {column:
+    float64 array}, whichever form it has (:func:`table_path`: ``NAME.parquet``, a file or a
+    dataset, else ``NAME.csv``); FileNotFoundError naming the table when it has neither."""
+    path = table_path(directory, name)
+    if path is None:
+        raise FileNotFoundError(
+            f"{directory / name}.csv: missing, nor {name}.parquet (record it with output.record)"
+        )
+    return read_columns(path)
 
 
 def read_columns(path: Path) -> dict[str, np.ndarray]:

@@ -26,6 +26,7 @@ from perga.model.compile import compile_case, load_system
 from perga.model.system import System
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
+from perga.output.tables import drop_converted
 from perga.output.vtk import VtkRecorder
 from perga.run import checkpoints
 from perga.run.directory import case_digest, prepare_directory, shown, write_case_copy
@@ -60,7 +61,7 @@ def writers(case: Case, directory: Path, system: System) -> list[Writer]:
     """The recorders ``output.record`` lists, each with its trigger: ParaView's every
     ``output.vtk_every`` (default ``output.every``), the tables every ``output.every``."""
     out = case.output
-    recorders = make_recorders(out.record, directory, system, out.granule_table)
+    recorders = make_recorders(out.record, directory, system, out.granule_table, out.tables)
     vtk_every = out.vtk_every if out.vtk_every is not None else out.every
     return [
         Writer(recorder, PhaseLock(vtk_every if vtk else out.every), vtk)
@@ -208,6 +209,7 @@ class _Run:
         self.last_written = -math.inf
         """When the last checkpoint file was written (time.perf_counter), s."""
         self.case_digest = case_digest(directory)
+        self.tables = case.output.tables
         self.ledger_tolerance = case.solver.ledger_tolerance
         self.remedy = smaller_steps(sim.spec)
 
@@ -272,8 +274,10 @@ class _Run:
 
 
 def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path) -> None:
-    """Judge the ledger of a completed run, close the recorders and write summary.json, from
-    the system and the simulation's frame at the end."""
+    """Judge the ledger of a completed run, close the recorders (writing the tables' Parquet
+    forms if the run is complete and asks for them) and write summary.json, from the system
+    and the simulation's frame at the end; then remove the CSV tables written as Parquet (a
+    run stopped before the end keeps its CSV tables, which --resume needs)."""
     frame = None if run is None else run.sim.frame(contacts=False)
     if run is not None and frame is not None and frame.energy is not None:
         summary.energy = asdict(frame.energy)
@@ -288,3 +292,5 @@ def _finish(summary: RunSummary, run: _Run | None, wall: float, directory: Path)
     if run is not None and frame is not None:
         describe_end(summary, frame, run.sim.spec, run.sim.threads)
     write_summary(summary, directory)
+    if run is not None and run.tables == "parquet" and summary.status in FINISHED:
+        drop_converted(directory)

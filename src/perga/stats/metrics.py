@@ -224,7 +224,8 @@ def granule_speed_after_impact(run: Run, n: float | None) -> float:
         raise MetricUnavailableError(
             "granule_speed_after_impact needs a whole impact number n >= 1"
         )
-    t = float(run.impacts["time"][_nth_impact(run, int(n))])
+    row = _nth_impact(run, int(n))
+    t = float(run.impacts["time"][row])
     track = run.track(0)
     if not track or track["time"].size == 0:
         raise MetricUnavailableError("the run did not record granules.csv")
@@ -305,12 +306,11 @@ def mean_speed_at_end(run: Run, _: float | None = None) -> float:
 
 def _outflow(run: Run) -> dict[str, FloatArray]:
     """outflow.csv: each granule that left through the outlet (mass, kg; survival, -; ...)."""
-    path = run.directory / "outflow.csv"
-    if not path.exists():
+    if "outflow.csv" not in _tables(run):
         raise MetricUnavailableError(
             "the run did not record its outflow (no [outlet], or output.record lacks 'outflow')"
         )
-    return read_table(path)
+    return read_table(run.directory / "outflow.csv")
 
 
 def _outflow_mass(run: Run) -> FloatArray:

@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from perga.case import load_case
 from perga.case.schema import Case
-from perga.output.tables import read_columns, table_path
+from perga.output.tables import read_run_table, table_path
 
 FloatArray = NDArray[np.float64]
 Columns = dict[str, FloatArray]
@@ -23,9 +23,10 @@ TABLES = ("granules", "hammers", "impacts", "contacts", "energy")
 
 
 def read_table(path: Path) -> Columns:
-    """A run table (CSV with a header row, or a Parquet dataset) as {column: float array};
-    empty columns if no rows (:func:`perga.output.tables.read_columns`)."""
-    return read_columns(path)
+    """The run table ``path`` names (``RUN/NAME.csv`` or ``RUN/NAME.parquet``), whichever form
+    the run has, as {column: float array}; empty columns if no rows
+    (:func:`perga.output.tables.read_run_table`)."""
+    return read_run_table(path.parent, path.stem)
 
 
 @dataclass(frozen=True)
@@ -84,8 +85,7 @@ class Run:
 
 
 def _optional(directory: Path, name: str) -> Columns:
-    path = table_path(directory, name)
-    return {} if path is None else read_columns(path)
+    return {} if table_path(directory, name) is None else read_run_table(directory, name)
 
 
 def load_run(directory: Path | str, label: str = "") -> Run:
@@ -96,7 +96,8 @@ def load_run(directory: Path | str, label: str = "") -> Run:
         if not (directory / needed).exists():
             raise FileNotFoundError(f"{directory} is not a run directory: no {needed}")
     summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
-    origin = Path(summary["case"]).parent if summary.get("case") else None
+    # the case file, named from the run directory (older runs: absolute)
+    origin = (directory / summary["case"]).parent if summary.get("case") else None
     return Run(
         directory=directory,
         case=load_case(directory / "case.toml", origin if origin and origin.is_dir() else None),
