@@ -5,7 +5,6 @@ from pathlib import Path
 import pytest
 
 from perga.case import CaseError, load_case
-from perga.case.reference import markdown_reference
 from perga.cli import main
 from perga.model.compile import check, compile_case
 
@@ -46,11 +45,6 @@ def test_validate_lists_problems_of_several_files_and_exits_2(capsys):
     captured = capsys.readouterr()
     assert f"ok: {BUNDLED[0]}" in captured.out
     assert str(BAD[0]) in captured.err and str(BAD[1]) in captured.err
-
-
-def test_case_file_reference_is_current():
-    # generated: `perga schema --markdown > docs/case-files.md`
-    assert (ROOT / "docs" / "case-files.md").read_text() == markdown_reference()
 
 
 def test_schema_prints_json_schema(capsys):

@@ -10,9 +10,10 @@ import pytest
 from perga.case import CaseError
 from perga.cli import main
 from perga.model.compile import compile_case, validated
+from tests.case_text import case_text
 
 ROOT = Path(__file__).resolve().parents[2]
-SINGLE = (ROOT / "cases" / "single-granule.toml").read_text()
+SINGLE = case_text(ROOT / "cases" / "single-granule.toml")
 PLATE = "mass = 0.02826\nhinge_radius = 0.08"
 # geometry/plate_hammer.stl: 150 x 50 x 10 mm steel, hinge 15 mm from the inner end
 PLATE_STL_AS_PLATE = (

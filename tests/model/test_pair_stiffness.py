@@ -11,6 +11,7 @@ import pytest
 from perga.case import CaseError
 from perga.model.compile import compile_case, validated
 from perga.model.plan import contact_durations
+from tests.case_text import case_text
 
 SOFT = Path(__file__).resolve().parents[2] / "cases" / "soft-separator.toml"
 RIGID = SOFT.with_name("separator.toml")
@@ -72,7 +73,7 @@ def test_hertz_pairs_with_their_own_stiffness_need_no_moduli(tmp_path: Path) -> 
     """Hertz without a shared stiffness takes each pair's from its materials' moduli, unless the
     pair has its own: every pair given its own → taken without moduli; one left → refused,
     naming the materials that then need them."""
-    text = SOFT.read_text().replace('kind = "linear"\nduration = 1e-4', 'kind = "hertz"')
+    text = case_text(SOFT).replace('kind = "linear"\nduration = 1e-4', 'kind = "hertz"')
     assert 'kind = "hertz"' in text
     case = tmp_path / "hertz.toml"
     case.write_text(text)

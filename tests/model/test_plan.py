@@ -19,9 +19,10 @@ from perga.model.plan import (
     steps_for_damping,
     tangential_half_periods,
 )
+from tests.case_text import case_text
 
 ROOT = Path(__file__).resolve().parents[2]
-SINGLE = (ROOT / "cases" / "single-granule.toml").read_text()
+SINGLE = case_text(ROOT / "cases" / "single-granule.toml")
 
 
 def _case(tmp_path, extra: str, replace: tuple[str, str] = ("", "")):

@@ -8,9 +8,10 @@ from pathlib import Path
 import pytest
 
 from perga.cli import main
+from tests.case_text import case_text
 
 ROOT = Path(__file__).resolve().parents[2]
-BUNDLED = (ROOT / "cases" / "bee-bread-separator.toml").read_text()
+BUNDLED = case_text(ROOT / "cases" / "bee-bread-separator.toml")
 
 
 def _validate(tmp_path: Path, text: str, capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:

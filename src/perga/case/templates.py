@@ -55,7 +55,7 @@ def write_template(name: str, out: Path, overwrite: bool = False) -> list[Path]:
     header = (
         f"# A perga case made by `perga new {name}` from cases/{source.name}: change it, then\n"
         f"# `perga validate {out.name}` and `perga run {out.name}`. Every key, its unit and its\n"
-        "# range: docs/case-files.md, or `perga schema --markdown`.\n\n"
+        "# range: docs/reference/case-files.md, or `perga schema --markdown`.\n\n"
     )
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(header + text, encoding="utf-8")

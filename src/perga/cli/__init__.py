@@ -28,7 +28,7 @@ EXAMPLES = """examples:
   perga window my.toml --set rotor.rpm=500:1700:4 --set hammers.mass=0.025:0.075:3 -o window
 
 exit status: 0 done, 1 a run that failed, 2 bad input, 3 a run whose energy ledger is off,
-128 + N after signal N. Every case key: docs/case-files.md (perga schema --markdown)."""
+128 + N after signal N. Every case key: docs/reference/case-files.md (perga schema --markdown)."""
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -78,5 +78,9 @@ def add_parsers(add: AddParser) -> None:
     parser.add_argument("cases", nargs="+", type=Path, metavar="CASE")
     parser.set_defaults(handler=validate)
     parser = add("schema", help="print the case-file JSON Schema")
-    parser.add_argument("--markdown", action="store_true", help="the reference docs/case-files.md")
+    parser.add_argument(
+        "--markdown",
+        action="store_true",
+        help="the Markdown reference, docs/reference/case-files.md",
+    )
     parser.set_defaults(handler=schema)
