@@ -4,10 +4,10 @@ Runs every scene and setting of :func:`perga.studies.accuracy.studies` once (wal
 of up to 3 runs where a run is cheap) and prints the recommended settings, then for each
 reference and error level the cheapest setting of each contact model and its cost relative to
 the cheapest overall. Errors are deterministic; wall times depend on the machine's load, which
-is printed. Figures and interpretation: docs/accuracy.md.
+is printed. Figures and interpretation: docs/explanation/accuracy.md.
 
     python benchmarks/accuracy.py                 # ~1.5-3 min on the shared 2-core machine
-    python benchmarks/accuracy.py -o docs/accuracy  # also the CSV, Markdown and PNGs
+    python benchmarks/accuracy.py -o docs/explanation/accuracy  # also the CSV, Markdown and PNGs
 """
 
 from __future__ import annotations

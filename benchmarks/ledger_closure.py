@@ -3,7 +3,7 @@ with a chamber at 0.1 ms, 1 ms, 10 ms and the case's end (its own duration): the
 the energy in play it is judged against (J), the kinetic energy at the start and now, the
 drive's work and the contacts' dissipation (J); the joints' correction work booked
 (``joint_correction``); and, for comparison, the residual over all the kinetic and elastic
-energy present, the machine's included (the denominator not chosen: docs/reliability.md).
+energy present, the machine's included (the denominator not chosen: docs/dev/reliability.md).
 
     python benchmarks/ledger_closure.py                    # every bundled case, ~4 min
     python benchmarks/ledger_closure.py separator vertical-rotor

@@ -1,7 +1,7 @@
 """Issue 19: single oblique Hertz impacts of a soft granule (E = 5 MPa, ν = 0.35, ρ = 1300
 kg/m³, r = 3 mm, 3.9 m/s, f = 0.3, t_c/50) on a flat wall, a resting twin and a kinematic
 polygon's face, angles 5-85°: the energy lost and the booked dissipation's error, both over the
-impact's energy (docs/validation.md, "The Hertz tangential spring keeps its energy"). The
+impact's energy (docs/dev/validation.md, "The Hertz tangential spring keeps its energy"). The
 impact itself is the test's (``tests/contact/soft/test_kernel_energy.py::_oblique``).
 
     python benchmarks/oblique_hertz.py          # ~10 s

@@ -11,7 +11,7 @@ The turning rotor (``--turning``): the same case's plate hinged (5 g, 200 g) or 
 (200 g) to a rotor turned so that its tip moves at 1, 10 and 40 m/s, e from the impact log
 (the contact's own rebound, ``tests/contact/soft/test_impact_log_at_speed.py``), linear and
 Hertz. These deviations are the law's own on a turning face (the frame's Coriolis and
-centrifugal forces over the contact's duration, docs/validation.md), not the kernel's: the
+centrifugal forces over the contact's duration, docs/dev/validation.md), not the kernel's: the
 kernel matches an independent integration of the law on the turning face
 (``tests/contact/soft/test_turning_face.py``).
 

@@ -1,6 +1,6 @@
 """Issue 18, item 4: the decay rate of a sticking contact's slip against the closed form ζω
 (ζ = √3 ζ_t, ω² = 3k_t/m for a disc on a floor), at several steps and with ζ_t = 0, through
-``tests/cases/closed-form/sticking-oscillation.toml`` (docs/validation.md, "Tangential damping
+``tests/cases/closed-form/sticking-oscillation.toml`` (docs/dev/validation.md, "Tangential damping
 of a sticking contact").
 
     python benchmarks/sticking_oscillation.py            # t_c/50, 100, 200, 400; ~1 min

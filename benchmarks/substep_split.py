@@ -3,7 +3,7 @@ granule held in the comb: the bundled bee-bread separator cut to one comb cell, 
 outlet, struck once in its first 12 ms, at 5 and 1 granule substeps and three steps; then the
 whole case's closure at 0.3 s for 5, 2 and 1 substeps (``--full``). With the hammers at their
 step-start velocity through the substeps the residual was first order in the machine step;
-kicked at every granule step, it is that of one substep (docs/reliability.md).
+kicked at every granule step, it is that of one substep (docs/dev/reliability.md).
 
     python benchmarks/substep_split.py          # ~10 s
     python benchmarks/substep_split.py --full   # ~2 min more

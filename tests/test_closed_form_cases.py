@@ -6,7 +6,7 @@ Every geometric input of a closed form (face offset h, start x0 and v0, strike d
 hinge radius R, l_cg, I_A, masses, e, f) is read from the case, not restated here; the test
 checks that the case describes the scene the closed form assumes (e.g. a central impact).
 The requirement is a relative error <= 1e-3; where one impulse solve gives the answer exactly,
-the tolerance is tighter and says why. Measured errors are in docs/validation.md.
+the tolerance is tighter and says why. Measured errors are in docs/dev/validation.md.
 """
 
 from __future__ import annotations

@@ -65,7 +65,7 @@ def test_restitution_on_a_hinged_hammer_at_the_default_step(tmp_path, mass, e):
 def test_granule_substeps_where_they_pay(tmp_path, mass, substeps, tolerance):
     """During the substeps of one Pymunk step the kernel kicks the hammer by each granule
     step's loads, so a light hammer recoils within them. Measured e errors at e = 0.9 and 10
-    substeps: 200 g +0.02 %, 5 g −0.22 % (docs/validation.md); with the hammer at its velocity
+    substeps: 200 g +0.02 %, 5 g −0.22 % (docs/dev/validation.md); with the hammer at its velocity
     through the substeps the 5 g one was +0.96 %. Asserted: the restitution tolerance, 0.5 %."""
     _, impacts = soft_run(
         tmp_path,
@@ -211,8 +211,8 @@ def test_heavy_damping_on_hinged_hammers_at_the_planned_step(model, e, mass):
 
 @pytest.mark.slow
 def test_the_turning_rotors_restitution_table() -> None:
-    """``python benchmarks/restitution_table.py --turning`` as docs/validation.md shows it (about
-    4 min): e from 0.6 up within 0.5 % in every cell (measured 0.11 % at most); below, the
+    """``python benchmarks/restitution_table.py --turning`` as docs/dev/validation.md shows it
+    (about 4 min): e from 0.6 up within 0.5 % in every cell (measured 0.11 % at most); below, the
     turning face's share, never more than 0.1 % above e and at most 3 % under it (measured
     −2.4 %, e = 0.05 at 40 m/s, Hertz)."""
     script = ROOT / "benchmarks" / "restitution_table.py"

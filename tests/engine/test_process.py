@@ -225,7 +225,7 @@ def test_fed_run_ledger_closes_to_one_percent(separator_run: Path) -> None:
     """Comb, feed, releases, screen: the ledger closes to the project's 1 % (measured -0.09 %
     at 0.2 s with the case's one granule step per machine step; at 0.3 s -0.06 %, and -0.33 %
     with two substeps, -1.01 % with five: the hammers' velocity held through the substeps,
-    docs/reliability.md)."""
+    docs/dev/reliability.md)."""
     summary = json.loads((separator_run / "summary.json").read_text())
     assert abs(summary["energy"]["closure"]) < 0.01
 

@@ -421,7 +421,7 @@ def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
     lists, 0.6-1.7 kB a frame whatever the granules: 66 kB in all, measured); the scratch file
     holds every frame and is gone after close. Measured in a process of its own: in a fresh
     clone's whole default run, 7.8 MB appeared in that window under perga's code, never in a
-    part of the suite nor alone; why is not found (docs/reliability.md)."""
+    part of the suite nor alone; why is not found (docs/dev/reliability.md)."""
     if os.environ.get("PERGA_MEMORY_PROBE") != "1":
         probe = f"{__file__}::test_recorder_memory_does_not_grow_with_frames"
         result = subprocess.run(

@@ -1,7 +1,7 @@
 """perga.stats against closed forms: synthetic tables, then a short real run.
 
 Synthetic data are exact, so the tolerances there are round-off or the fit's conditioning
-(1e-6); the real run is one rigid impulse solve, exact to round-off (docs/validation.md), so
+(1e-6); the real run is one rigid impulse solve, exact to round-off (docs/dev/validation.md), so
 1e-9 catches any error in the bookkeeping.
 """
 

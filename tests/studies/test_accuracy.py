@@ -103,7 +103,7 @@ def test_rigid_restitution_is_exact(quick) -> None:
 @pytest.mark.parametrize("model", ["linear", "hertz"])
 def test_soft_restitution_converges_at_second_order(quick, model: str) -> None:
     """The kernel's dashpot is an exact impulse over the kick interval and forces use velocities
-    extrapolated to the force time: e's error is O((dt/t_c)²) (docs/validation.md; measured
+    extrapolated to the force time: e's error is O((dt/t_c)²) (docs/dev/validation.md; measured
     orders 1.8-2.1 from t_c/10 to t_c/40). Accepted 1.6-2.4: a first-order error (order ~1)
     or a step-independent one (~0) fails."""
     pairs = _errors(quick.rows, "restitution", model)
@@ -114,7 +114,7 @@ def test_soft_restitution_converges_at_second_order(quick, model: str) -> None:
 
 def test_rigid_hinged_impact_and_ledger_are_first_order(quick) -> None:
     """The hinge's impulse within the impact step (impact law) and the pivot joint's position
-    correction (ledger) are first order in dt (docs/validation.md); from 1e-4 to 1e-5 s
+    correction (ledger) are first order in dt (docs/dev/validation.md); from 1e-4 to 1e-5 s
     measured orders 1.00 and 1.07. Accepted 0.7-1.3."""
     for reference in ("hinged", "energy"):
         (order,) = _orders(_errors(quick.rows, reference, "rigid"))

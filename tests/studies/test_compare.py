@@ -2,7 +2,7 @@
 and the 1 % agreement wherever simulation and analytical model describe the same physics.
 
 The tolerance is the issue's 1 % (perga.studies.compare_rows.AGREEMENT): the rigid engine reproduces
-the closed forms to 1e-4-5e-4 at the bundled steps (docs/validation.md), so a modelling or
+the closed forms to 1e-4-5e-4 at the bundled steps (docs/dev/validation.md), so a modelling or
 bookkeeping error shows; regimes that differ are reported, not asserted to agree. One report is
 generated per session (under a minute on two cores); its runs are study jobs on the executor, found
 finished by key when run again.

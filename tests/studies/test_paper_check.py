@@ -23,7 +23,7 @@ ROWS = {row.key: row for row in check_paper(FITTED, REALISTIC)}
 FIT, REAL = Params.from_case(FITTED), Params.from_case(REALISTIC)
 
 # (fitted verdict, realistic verdict) for every row: a change in any physics or any parameter
-# that flips a verdict must be a deliberate edit here and in docs/paper-notes.md.
+# that flips a verdict must be a deliberate edit here and in docs/explanation/paper-notes.md.
 EXPECTED_VERDICTS = {
     "decay-0.02s": ("yes", "yes"),
     "decay-0.05s": ("yes", "yes"),

@@ -31,6 +31,7 @@ from perga.studies.window import (
     trend,
     window_study,
 )
+from tests.case_text import case_text
 from tests.figure_data import saved_figures
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -301,7 +302,8 @@ def test_window_end_to_end_on_dask(tmp_path: Path, monkeypatch) -> None:
     replicates cannot show damage rising, since at 600 rpm a granule out of the comb may stay in
     the chamber and be struck again and again (a replicate at 50 g: no product, damage 0.55,
     the point 0.31 ± 0.21 against 0.27 ± 0.05 at 1800 rpm); the full map shows the rise
-    (docs/operating-window.md). The comb's release needs a peak force that grows with speed."""
+    (docs/explanation/operating-window.md). The comb's release needs a peak force that grows
+    with speed."""
     out = tmp_path / "window"
     saved = saved_figures(monkeypatch)
     code = main(
@@ -385,7 +387,7 @@ def test_the_report_says_what_the_map_rests_on(tmp_path: Path) -> None:
     with pytest.raises(StudyError, match="a study's values are numbers, strings or booleans"):
         window_study(CASE, [*sets, 'contact_model={kind="rigid"}'])
     rigid_case = tmp_path / "rigid.toml"
-    text = CASE.read_text().replace("../geometry", str(ROOT / "geometry"))
+    text = case_text(CASE).replace("../geometry", str(ROOT / "geometry"))
     start = text.index("[contact_model]")
     rigid_case.write_text(text[:start] + '[contact_model]\nkind = "rigid"\n\n' +
                           text[text.index("[solver]"):])  # fmt: skip

@@ -8,8 +8,8 @@ below are the paper's.
 Everything here reproduces the printed equations, including their errors, so that the
 paper's claims can be evaluated as the authors computed them. Where an equation is wrong the
 docstring says so; the physically consistent models are in :mod:`perga.analytic.sliding`,
-:mod:`perga.analytic.impact` and :mod:`perga.analytic.hammer`. ``docs/paper-notes.md`` lists
-every error with numbers.
+:mod:`perga.analytic.impact` and :mod:`perga.analytic.hammer`.
+``docs/explanation/paper-notes.md`` lists every error with numbers.
 
 Symbols: x relative radial displacement in the rotating frame (m), ω rotor angular velocity
 (rad/s), f friction coefficient (-), g gravitational acceleration (m/s²), R hinge radius (m),

@@ -20,7 +20,7 @@ in Chipmunk's internal units (:mod:`perga.machine.units`).
 Where the kick sits (an operator split): kick (at x_n, v_n), then the contacts and Chipmunk's
 step drift with the kicked velocity and apply their impulses. First order in dt; the kick sees
 the position at the start of the step, and an impact's approach speed includes the step's
-friction and drag (docs/validation.md has the measured effect on the closed forms).
+friction and drag (docs/dev/validation.md has the measured effect on the closed forms).
 
 Energy: every effect counts, in J, the energy it removed (``removed`` >= 0) and the work the
 rotor did through it (``supplied``, only the co-rotating floor), each from its own kicks or

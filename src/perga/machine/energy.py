@@ -32,11 +32,11 @@ The terms:
   pin's impulse, read raw through :class:`~perga.machine.chipmunk_state.JointImpulses`): an
   ideal pin does none; Chipmunk's pulls the drifting anchors together and does, first order
   in dt. Unbooked, it was the whole residual before a run's first impact
-  (docs/reliability.md).
+  (docs/dev/reliability.md).
 * ``residual`` = drive_work + gravity_work + joint_correction + inflow − outflow − ΔKE −
   Δelastic − contact_dissipation − friction − drag, J: what the steps lose or make besides
   that (the first-order split of the kicks, such as gravity's on a rigid contact; the soft
-  kernel's step; each falls with the step, docs/reliability.md)
+  kernel's step; each falls with the step, docs/dev/reliability.md)
   and rounding (the swing stops' and hinge friction's work is booked signed by their effects,
   :class:`~perga.machine.effects.ConstraintLosses`).
 * ``energy_in_play`` = max(|drive_work|, |ΔKE + Δelastic|, |gravity_work|, ½Σ_i|ΔKE_i|,
@@ -46,7 +46,7 @@ The terms:
   ΔKE = 0); the granules' energy where nothing has happened yet (granules fed in flight).
   The machine's own kinetic energy is not in it: a hammer carried round at constant speed
   holds tens of joules that nothing exchanges, and would hide a residual of the granules'
-  scale (docs/reliability.md).
+  scale (docs/dev/reliability.md).
 * ``closure`` = residual / energy_in_play: what ``solver.ledger_tolerance`` judges. The
   residual itself (J) is kept beside it, so that a long run whose work done has grown large
   still shows its absolute error.

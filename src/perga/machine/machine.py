@@ -323,7 +323,7 @@ def build_machine(spec: System) -> Machine:
     space.gravity = u.vec_to_internal(spec.gravity, u.ACCELERATION)
     space.collision_slop = u.to_internal(u.COLLISION_SLOP, u.LENGTH)
     # A pair that separates is forgotten at once: one that touches again within Chipmunk's
-    # default 3 steps starts its solve from impulses it never applies (docs/reliability.md).
+    # default 3 steps starts its solve from impulses it never applies (docs/dev/reliability.md).
     space.collision_persistence = 1
 
     omega = u.to_internal(spec.rotor.angular_velocity, u.ANGULAR_VELOCITY)

@@ -231,7 +231,7 @@ def steps_for_damping(zeta: float, asked: float) -> float:
     t_c√(1 − ζ²)/(2πζ) the dashpot's time (t_c of a linear contact that ends at zero overlap):
     at the default 50, 20 steps per τ. At t_c/50 alone, e = 0.05 (ζ = 0.69) came out 0.7-1.2 %
     low (second order in the step); this gives it 120 steps; it leaves ζ ≤ 0.37 (e ≥ 0.39 for
-    a contact that ends at zero force, e ≥ 0.29 at zero overlap) at 50 (docs/validation.md).
+    a contact that ends at zero force, e ≥ 0.29 at zero overlap) at 50 (docs/dev/validation.md).
     A factor, not a floor, so that a study of the step (``perga accuracy``) keeps its ladder."""
     return asked * max(1.0, DAMPING_SCALE * 2.0 * math.pi * zeta / math.sqrt(1.0 - zeta**2))
 

@@ -99,7 +99,7 @@ class _RunUnpickler(pickle.Unpickler):
 @contextmanager
 def _no_collection() -> Iterator[None]:
     """Python's cyclic garbage collector held off: (un)pickling makes many objects, and the
-    collections they trigger would cost more than the pickling (docs/reliability.md)."""
+    collections they trigger would cost more than the pickling (docs/dev/reliability.md)."""
     enabled = gc.isenabled()
     gc.disable()
     try:

@@ -18,7 +18,7 @@ Four methods:
   prior over the bounds and the Gaussian likelihood of the residuals (without sd columns the
   noise is the least-squares estimate s, stated in fit.json), started around the least-squares
   optimum; each step's walkers run as one batch. The 95 % intervals are the posterior's 2.5 and
-  97.5 percentiles. docs/calibration.md says why emcee.
+  97.5 percentiles. docs/dev/calibration.md says why emcee.
 
 * ``surrogate`` and ``two-fidelity``: the posterior from at most ``runs`` runs, sampled on
   Gaussian-process surrogates of the metrics refined where the posterior lies; the second

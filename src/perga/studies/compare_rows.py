@@ -12,7 +12,7 @@ from perga.stats.tables import Run
 AGREEMENT = 0.01
 """Relative tolerance where simulation and analytical model describe the same physics: the
 issue's 1 %. The rigid engine reproduces the closed forms to 1e-4-5e-4 at the bundled steps
-(docs/validation.md), so 1 % catches any modelling error with a margin of 20 or more."""
+(docs/dev/validation.md), so 1 % catches any modelling error with a margin of 20 or more."""
 
 
 @dataclass(frozen=True)

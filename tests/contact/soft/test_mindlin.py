@@ -14,7 +14,7 @@ wall at v_n = 3.9 m/s, its k_t/k_n Mindlin's on Hertz's secant, 6G*/E* = 3(1 −
 the contact, and the case plan gives 50 steps to the shorter of the two. The reference is the
 model without its time discretisation (``_reference`` of the Chung & Ooi tests, solve_ivp to
 rtol 1e-11). The figures against MBF's theory and the full-stick limit of Mindlin-Deresiewicz's
-rule: ``python benchmarks/maw_barber_fawcett.py`` (docs/validation.md).
+rule: ``python benchmarks/maw_barber_fawcett.py`` (docs/dev/validation.md).
 """
 
 from __future__ import annotations

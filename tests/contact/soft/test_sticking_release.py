@@ -8,7 +8,7 @@ and booked as the contact's dissipation (``SoftGranules.dissipated``, the ledger
 error of the tangential oscillation (at most 1.3e-3 of the impact's energy measured here, at
 the step the granule takes by default); the share dropped grows with the incidence and with
 k_t/k_n: at most 4.1 % for the linear law at LAMMPS's 2/7, 32 % for Hertz at k_t/k_n = 1
-(docs/validation.md)."""
+(docs/dev/validation.md)."""
 
 from __future__ import annotations
 

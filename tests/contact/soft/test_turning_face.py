@@ -112,7 +112,7 @@ def test_the_kernel_rebounds_as_the_law_on_a_turning_face(
     """At rest (ω = 1e-6 rad/s) both give the asked e (the kernel to its step error); at
     1500 rpm and 1 m/s both give e 39 % low; at 2700 rpm (a 140 mm tip at 40 m/s) and 10 or
     40 m/s the law's own −0.62 and +0.47 % (the reference, to 5e-4 of e): the turning face's
-    share of the restitution table's fast cells (docs/validation.md). The kernel agrees with
+    share of the restitution table's fast cells (docs/dev/validation.md). The kernel agrees with
     the reference to 0.3 % of e (measured 0.03-0.11 % at 2700 rpm)."""
     kernel, reference = _shot(max(rpm * 2 * math.pi / 60, 1e-6), speed)
     assert reference / E - 1 == pytest.approx(deviation, abs=5e-4 if rpm > 1500 else 5e-3)

@@ -3,7 +3,7 @@
 Chipmunk collides a granule with each convex piece on its own, so near a seam between two
 pieces it makes contacts that the hammer's outline does not have: with the seam itself (a
 "ghost" normal along the diagonal) and with a corner split between two pieces (blended
-normals; docs/validation.md has what that does to a rebound). ``OutlineFilter`` gives every
+normals; docs/dev/validation.md has what that does to a rebound). ``OutlineFilter`` gives every
 Chipmunk contact of such a hammer, in ``pre_solve``, the contact of the soft kernel's rule
 (:func:`perga.geometry.disc_polygon.closest_feature` over the piece's solid edges and owned
 corners): a piece whose feature is not the outline's, or that the granule does not overlap by

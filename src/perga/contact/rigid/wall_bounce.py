@@ -16,7 +16,7 @@ after the step is the one that gives the granule, where the step left it (s_{k+1
 energy: u = √(e²u_t² + 2g_n·s_{k+1}), v = u + ½g_n·dt. Chipmunk gets it as the arbiter's
 restitution (its bounce is the restitution times the step's starting normal velocity) and the
 contact's distance as 0 (no push follows). The friction impulse is Chipmunk's. Heights after
-each bounce then follow e² to round-off (docs/validation.md has the figures before and after).
+each bounce then follow e² to round-off (docs/dev/validation.md has the figures before and after).
 """
 
 from __future__ import annotations

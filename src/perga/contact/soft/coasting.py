@@ -1,6 +1,5 @@
 """Coasting granules: the granules no contact can reach for the rest of a kernel call take
-all of its steps at once, with the same floats as step by step (issue 14, item 5;
-docs/dev/performance.md).
+all of its steps at once, with the same floats as step by step (docs/dev/performance.md).
 
 A granule coasts from step k0 of a call for the S steps left when
 

@@ -748,7 +748,7 @@ class SoftGranules:
         v_release; then zeroes velocities, spins, tangential springs, the polygon contact history
         and ``dissipated``. Polygons are held at rest meanwhile (their velocities are restored
         afterwards); overlaps with them are not part of the release criterion. Without it a
-        densely overlapping packing explodes (docs/validation.md). Raises RuntimeError after
+        densely overlapping packing explodes (docs/dev/validation.md). Raises RuntimeError after
         max_steps.
         """
         drag = math.pi / self.t_c if drag is None else drag

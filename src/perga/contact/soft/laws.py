@@ -75,7 +75,7 @@ def contact_force(kn, damp, hertz, clamp, kt, dampt, mu, delta, ddelta, vt, m_ef
     D√(k_n m_eff)[Φ(δ⁺) − Φ(δ⁻)] with δ± = max(0, δ ± ½ dt δ̇), Φ(δ) = δ (linear) or
     (4/5) δ^{5/4} (Hertz), divided by dt. Inside a contact this equals the usual c(δ) δ̇ to
     O(dt²); at first touch it applies only the part of the step the bodies overlap, so that e
-    does not depend on where in a step first touch falls (docs/validation.md).
+    does not depend on where in a step first touch falls (docs/dev/validation.md).
 
     Dissipated energy over the step, J (< 0 only sliding with a dashpot above the cap, whose
     rescaled spring stores more than the work; docs/dev/testing.md): normal (F_n − F_spring)·δ̇·dt
@@ -119,7 +119,7 @@ def tangential_force(kt, dampt, mu, fn, vt, m_eff, h, dt, hertz):
     coordinate h = ξ √k_t (stored energy ½ h², :func:`spring_energy`): the stretch is rescaled
     to each step's k_t, ξ = h/√k_t, so a change of overlap neither makes nor loses tangential
     energy, and where k_t = 0 (evaluated before the discs touch) nothing is stretched, stored
-    or lost (docs/validation.md)."""
+    or lost (docs/dev/validation.md)."""
     if hertz != 0.0:
         if kt == 0.0:
             return 0.0, h, 0.0
@@ -254,7 +254,7 @@ def contact_parameters(
     mass fixes (``fixed_duration``; linear: ``LinearSpringDashpot.from_duration``).
     k_t = kt_ratio·k_n (Hertz: k_t = kt_ratio·k_n·√δ; default the law's, 2/7); friction f,
     rolling μ_r, tangential damping ratio zeta_t. end="force" (default) clamps F_n ≥ 0 and
-    calibrates the damping for it (Schwager & Pöschel 2007; docs/validation.md); end="overlap"
+    calibrates the damping for it (Schwager & Pöschel 2007; docs/dev/validation.md); end="overlap"
     lets the force be attractive until δ = 0.
     """
     contact = named_law(law)
