@@ -29,7 +29,8 @@ def cpu_name() -> str:
 
 def main() -> None:
     first, tour = runnable_blocks(ROOT / "README.md")[:2]
-    lines = [without_install(first.text).splitlines()[0], *without_install(tour.text).splitlines()]
+    typed = [first.text.splitlines()[0], *tour.text.replace("\\\n", " ").splitlines()]
+    lines = [(line, without_install(line).strip()) for line in typed]
     print(f"machine: {cpu_name()}, {os.cpu_count()} cores; load before {os.getloadavg()[0]:.2f}")
     with tempfile.TemporaryDirectory() as tmp:
         folder = fresh_folder(Path(tmp) / "reader")
@@ -38,14 +39,15 @@ def main() -> None:
         (bin_dir / "perga").unlink()  # the installed perga, uncapped; ParaView loads and exits
         env["PATH"] = f"{bin_dir}{os.pathsep}{env['PATH']}"
         print("| command | wall time (s) |\n|---|---:|")
-        for line in lines:
+        for shown, line in lines:
             start = time.perf_counter()
             done = subprocess.run(
                 ["bash", "-eo", "pipefail", "-c", line], cwd=folder, env=env, capture_output=True
             )
             seconds = time.perf_counter() - start
-            status = "" if done.returncode == 0 else f" (exit {done.returncode})"
-            print(f"| `{line.split('#')[0].strip()}` | {seconds:.1f}{status} |", flush=True)
+            status = "" if done.returncode == 0 else f" (failed: exit {done.returncode})"
+            command = " ".join(without_install(shown.split("#")[0]).split())
+            print(f"| `{command}` | {seconds:.1f}{status} |", flush=True)
     print(f"load after {os.getloadavg()[0]:.2f}")
 
 

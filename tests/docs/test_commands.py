@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -21,6 +20,7 @@ from tests.docs.commands import (
     user_pages,
     without_install,
 )
+from tests.tools import require
 
 EXEMPT = {
     "SLURMCluster": "submits workers to a SLURM queue",
@@ -31,6 +31,7 @@ EXEMPT = {
 """Text that makes a block one the tests cannot run here, and why."""
 
 PARAVIEW = ("paraview ", "pvbatch", "pvpython", "xvfb-run")
+PARAVIEW_PROGRAMS = ("paraview", "pvbatch", "xvfb-run")
 PAGES = [page for page in user_pages() if runnable_blocks(page)]
 
 
@@ -45,12 +46,8 @@ def test_every_command_of_the_page_runs_as_written(page, tmp_path):
     """The page's bash and python blocks, in order, in one fresh folder: each exits 0 (runs of
     bundled cases shortened to CAP's simulated seconds)."""
     blocks = runnable_blocks(page)
-    if any(needs_paraview(b.text) for b in blocks) and not all(
-        shutil.which(p) for p in ("paraview", "pvbatch", "xvfb-run")
-    ):
-        if os.environ.get("CI") == "true":
-            pytest.fail("ParaView or xvfb-run is not installed and CI=true")
-        pytest.skip("ParaView or xvfb-run is not installed (apt-get install paraview xvfb)")
+    if any(needs_paraview(b.text) for b in blocks):
+        require(*PARAVIEW_PROGRAMS, install="apt-get install paraview python3-paraview xvfb")
     folder = fresh_folder(tmp_path / "reader")
     env = dict(os.environ, MPLBACKEND="Agg")
     env["PATH"] = f"{stand_ins(tmp_path)}{os.pathsep}{env['PATH']}"

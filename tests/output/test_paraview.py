@@ -1,8 +1,7 @@
 """The real client: ParaView (its GUI, ``paraview``, and ``pvbatch``) opens a run written by perga
-and renders it (skipped, saying why, where ParaView or xvfb-run is absent; .ci/run installs
-Debian's paraview, python3-paraview and xvfb)."""
+and renders it (skipped, saying why, where ParaView or xvfb-run is absent, failed under
+``CI=true``: .ci/run installs Debian's paraview, python3-paraview and xvfb)."""
 
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -11,15 +10,22 @@ import numpy as np
 import pytest
 
 from perga.cli import main
+from tests.tools import require
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "postprocess" / "paraview" / "render_run.py"
 OUTPUT_3D = "\n[output]\nvtk_3d = true\n"
 
-pytestmark = pytest.mark.skipif(
-    any(shutil.which(p) is None for p in ("paraview", "pvbatch", "xvfb-run")),
-    reason="ParaView or xvfb-run is not installed (apt-get install paraview python3-paraview xvfb)",
-)
+PROGRAMS = ("paraview", "pvbatch", "xvfb-run")
+INSTALL = "apt-get install paraview python3-paraview xvfb"
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _paraview() -> None:
+    """Every test here needs ParaView and a virtual display (tests/tools.py)."""
+    require(*PROGRAMS, install=INSTALL)
+
+
 GUI_DRIVER = """
 import os
 from paraview import simple as pv
