@@ -49,9 +49,8 @@ class ImpactStats:
     v_n'), positive on the side v_t had before (forward), rad."""
     tangential_restitution_centre: float
     """β_c = −u_t'/u_t of the granule's centre, u_t = v_t + ω r its tangential velocity relative
-    to the hammer's material point at the contact, - (nan head-on, or without the spins). A
-    rigid contact's point lies half its overlap δ inside the rim, so a spinning granule's u_t
-    is off by ω δ/2 (:func:`perga.stats.metrics.shot_rebound` reads a shot's centre itself)."""
+    to the hammer's material point at the contact (v_t taken at the granule's rim), - (nan
+    head-on, or without the spins)."""
     rebound_angle_centre: float
     """The centre's relative velocity after the impact from the normal, atan2(±u_t', v_n'),
     positive on the side u_t had before (forward), rad (nan without the spins)."""

@@ -1,9 +1,10 @@
 """One run of a study: a case with overrides, run into its own directory, reduced to a row of
 metrics (:func:`run_job`, which a Dask worker executes), and the key that names it.
 
-A run's key is a hash of its resolved case (the file's data with the overrides applied), its
-seed and the perga version: the same run in another study, or the same study run again, has
-the same key and directory, so finished runs are found and not run again. A run that fails is
+A run's key is a hash of its resolved case (the file's data with the overrides applied), the
+contents of the geometry files it points to, its seed and the perga version: the same run in
+another study, or the same study run again, has the same key and directory, so finished runs
+are found and not run again, and an edited case or geometry file makes new runs. A run that fails is
 a row with ``status = "failed"`` and the reason; :func:`run_job` never raises for it.
 """
 
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from perga import __version__
+from perga.case.files import file_tables
 from perga.case.load import overridden, read_case_data
 
 ROW = "row.json"
@@ -59,11 +61,30 @@ class Job:
         return (*self.extra, *own, f"solver.seed={self.seed}")
 
 
+def pointed_files(data: Any, folder: Path) -> dict[str, str]:
+    """SHA-256 of each geometry file the case data names (:func:`perga.case.files.file_tables`:
+    its ``path``, relative to ``folder`` or absolute), by the path as written; "unreadable" for
+    one that cannot be read (its run then fails and says why)."""
+    digests = {}
+    for table in file_tables(data):
+        try:
+            digests[table["path"]] = hashlib.sha256(
+                (folder / table["path"]).read_bytes()
+            ).hexdigest()
+        except OSError:
+            digests[table["path"]] = "unreadable"
+    return digests
+
+
 def run_key(case: str | Path, overrides: tuple[str, ...], seed: int) -> str:
-    """The key of a run: a hash of the resolved case data, the seed and perga's version."""
+    """The key of a run: a hash of the resolved case data, the geometry files it points to
+    (:func:`pointed_files`), the seed and perga's version."""
     data = overridden(read_case_data(case), overrides, case)
+    files = pointed_files(data, Path(case).resolve().parent)
     text = json.dumps(
-        {"case": data, "seed": seed, "perga": __version__}, sort_keys=True, default=str
+        {"case": data, "seed": seed, "perga": __version__} | ({"files": files} if files else {}),
+        sort_keys=True,
+        default=str,
     )
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

@@ -31,15 +31,17 @@ from perga.model.records import Contact, HammerState, Impact
 
 
 def _contact(arbiter: pymunk.Arbiter) -> tuple[pymunk.Vec2d, pymunk.Vec2d, pymunk.Vec2d]:
-    """Relative velocity granule − hammer at the contact point (internal units), the point and
-    the hammer's outward normal. Shapes are ordered (granule, hammer)."""
+    """Relative velocity granule − hammer at the contact (internal units), the contact point
+    (midway between the two surfaces) and the hammer's outward normal. Shapes are ordered
+    (granule, hammer). Each body's velocity is taken at its own contact point, where Chipmunk
+    applies its impulse (the granule's on its rim): the slip the impulse acts on, so that
+    −J·v̄_rel is exactly what the impulse dissipates, a spinning granule's included."""
     granule_shape, hammer_shape = arbiter.shapes
     outward = -arbiter.normal  # arbiter.normal points from the granule to the hammer
-    points = arbiter.contact_point_set.points
-    p = (points[0].point_a + points[0].point_b) * 0.5
-    v_g = granule_shape.body.velocity_at_world_point(p)
-    v_h = hammer_shape.body.velocity_at_world_point(p)
-    return v_g - v_h, p, outward
+    point = arbiter.contact_point_set.points[0]
+    v_g = granule_shape.body.velocity_at_world_point(point.point_a)
+    v_h = hammer_shape.body.velocity_at_world_point(point.point_b)
+    return v_g - v_h, (point.point_a + point.point_b) * 0.5, outward
 
 
 def _granule_energy(body: pymunk.Body) -> float:
