@@ -9,11 +9,13 @@ The moment is drawn uniformly from the run's first checkpoint (written at t = 0,
 build) to the end of the uninterrupted run's wall time, so that every trial has something to
 resume from; a signal that lands after the end, or as the completed process exits, is counted
 as "ended first", and trials go on until ``--trials`` runs were stopped and resumed. Signals
-during start-up are tests/test_faults.py's. Do not edit perga while
-this runs: a checkpoint is read only by the code that wrote it.
+during start-up are tests/test_faults.py's. With ``--geometry`` the cases are instead every
+bundled case with a geometry file, shortened as tests/test_resume_geometry.py does. Do not
+edit perga while this runs: a checkpoint is read only by the code that wrote it.
 
     python benchmarks/kill_resume.py                  # 20 trials each: ~40 min on 2 cores
     python benchmarks/kill_resume.py --trials 2       # a smoke run
+    python benchmarks/kill_resume.py --geometry --trials 2
 """
 
 from __future__ import annotations
@@ -32,8 +34,10 @@ import time
 from collections import Counter
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from test_faults import assert_readable
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from tests.run_files import outputs
+from tests.test_faults import assert_readable
+from tests.test_resume_geometry import GEOMETRY_CASES
 
 CASES = {
     "rigid": ("cases/separator.toml", ["solver.duration=0.3", "output.checkpoint_every=0.02"]),
@@ -45,14 +49,6 @@ SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGKILL)
 def command(case: str, out: Path, sets: list[str]) -> list[str]:
     overrides = [a for s in sets for a in ("--set", s)]
     return [sys.executable, "-m", "perga.cli", "run", case, "-o", str(out), "--quiet", *overrides]
-
-
-def outputs(run: Path) -> list[str]:
-    return sorted(
-        str(p.relative_to(run))
-        for p in run.rglob("*")
-        if p.is_file() and "checkpoints" not in p.parts and p.name != "summary.json"
-    )
 
 
 def identical(run: Path, reference: Path) -> bool:
@@ -101,13 +97,22 @@ def main() -> None:
     )
     parser.add_argument("--seed", type=int, default=15)
     parser.add_argument("--engines", nargs="+", choices=list(CASES), default=list(CASES))
+    parser.add_argument(
+        "--geometry",
+        action="store_true",
+        help="the bundled cases with a geometry file instead of the separators (--engines)",
+    )
     args = parser.parse_args()
+    cases = (
+        {Path(n).stem: (f"cases/{n}", sets) for n, sets in GEOMETRY_CASES.items()}
+        if args.geometry
+        else {engine: CASES[engine] for engine in args.engines}
+    )
     rng = random.Random(args.seed)
     print(f"load average at start: {os.getloadavg()[0]:.2f}; {args.trials} trials each")
     with tempfile.TemporaryDirectory() as scratch:
         root = Path(scratch)
-        for engine in args.engines:
-            case, sets = CASES[engine]
+        for engine, (case, sets) in cases.items():
             for warm in (True, False):  # the first run fills numba's cache (compiling)
                 reference = root / f"{engine}-reference-{warm}"
                 proc = subprocess.Popen(command(case, reference, sets))

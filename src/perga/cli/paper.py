@@ -67,6 +67,7 @@ def accuracy(args: argparse.Namespace) -> int:
 def compare(args: argparse.Namespace) -> int:
     """Runs (and with --paper the bundled paper runs) against the analytical model."""
     from perga.case import load_case
+    from perga.output.tables import TableError
     from perga.stats import load_run
     from perga.studies.compare import analyse
     from perga.studies.compare_report import write_report
@@ -80,7 +81,7 @@ def compare(args: argparse.Namespace) -> int:
     out = args.output or Path("reports/paper" if args.paper else "reports/compare")
     try:
         runs = [load_run(d) for d in args.runs]
-    except FileNotFoundError as exc:
+    except (FileNotFoundError, TableError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     fitted = default_case("paper-fitted.toml")

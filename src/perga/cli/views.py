@@ -44,11 +44,12 @@ def render(args: argparse.Namespace) -> int:
 def report(args: argparse.Namespace) -> int:
     """RUN/report/report.md with its figures."""
     from perga.case import CaseError
+    from perga.output.tables import TableError
     from perga.studies.run_report import write_run_report
 
     try:
         path = write_run_report(args.run, args.output)
-    except (FileNotFoundError, CaseError) as exc:
+    except (FileNotFoundError, CaseError, TableError) as exc:
         return problems([str(exc)])
     print(f"wrote {path} (figures beside it)")
     return 0

@@ -300,16 +300,51 @@ def read_run_table(directory: Path, name: str) -> dict[str, np.ndarray]:
     return read_columns(path)
 
 
+class TableError(ValueError):
+    """A run table that cannot be read (torn, damaged, not a table): the message names the
+    file and, in a CSV table, the first bad row by its line number."""
+
+
 def read_columns(path: Path) -> dict[str, np.ndarray]:
     """A run table (a CSV file with a header row, or a Parquet dataset) as {column: float64
-    array}; empty columns when it has no rows."""
+    array}; empty columns when it has no rows. TableError naming the file (and a CSV's first
+    bad line) when it cannot be read."""
     if path.suffix == ".parquet":
-        table = pq.read_table(path)
+        try:
+            table = pq.read_table(path)
+        except pa.ArrowException as exc:
+            raise TableError(f"{path}: not a readable Parquet table ({exc})") from None
         return {name: table.column(name).to_numpy().astype(float) for name in table.column_names}
-    with path.open(encoding="utf-8") as stream:
-        header = stream.readline().strip().split(",")
-        body = stream.read()
+    try:
+        with path.open(encoding="utf-8") as stream:
+            header = stream.readline().strip().split(",")
+            body = stream.read()
+    except UnicodeDecodeError:
+        raise TableError(f"{path}: not a CSV table (not UTF-8 text)") from None
     if not body.strip():
         return {name: np.empty(0) for name in header}
-    data = np.loadtxt(body.splitlines(), delimiter=",", ndmin=2)
+    lines = body.splitlines()
+    try:
+        data = np.loadtxt(lines, delimiter=",", ndmin=2)
+    except ValueError as exc:
+        raise TableError(f"{path}: {_first_bad_row(lines, len(header)) or exc}") from None
+    if data.shape[1] != len(header):
+        raise TableError(f"{path}: rows of {data.shape[1]} values, the header has {len(header)}")
     return {name: data[:, i] for i, name in enumerate(header)}
+
+
+def _first_bad_row(lines: Sequence[str], width: int) -> str:
+    """The first of a CSV table's rows (``lines``, those after its header) that is not
+    ``width`` numbers, in words with its line number in the file; "" if none is."""
+    for number, line in enumerate(lines, start=2):
+        values = line.split(",")
+        if not line.strip():
+            continue
+        if len(values) != width:
+            return f"line {number}: {len(values)} values, the header has {width} (a torn row)"
+        for value in values:
+            try:
+                float(value)
+            except ValueError:
+                return f"line {number}: {value.strip()!r} is not a number"
+    return ""

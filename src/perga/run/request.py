@@ -13,7 +13,12 @@ from perga.case.schema import Case
 from perga.model.compile import check_parameters, compile_case
 from perga.model.system import System
 from perga.run.checkpoints import CheckpointError
-from perga.run.directory import prepare_directory
+from perga.run.directory import (
+    DirectoryLock,
+    DirectoryLockedError,
+    changed_geometry,
+    prepare_directory,
+)
 from perga.run.loop import Progress, resume_run, run_case
 from perga.run.restart import RunStateError, case_from_run, check_resumable
 from perga.run.summary import LEDGER_OFF, RunSummary, ledger_closure_text
@@ -40,12 +45,14 @@ class Request:
 @dataclass(frozen=True)
 class Prepared:
     """A request ready to run: its case, its system (None to go on with a stopped run, whose
-    checkpoint holds the simulation) and its directory."""
+    checkpoint holds the simulation), its directory and the directory's lock, held until
+    :func:`execute` ends."""
 
     request: Request
     case: Case
     system: System | None
     directory: Path
+    lock: DirectoryLock
 
     @property
     def resume(self) -> bool:
@@ -66,6 +73,8 @@ def load(request: Request) -> tuple[Case, System | None]:
             )
         if not (r.resume / "case.toml").is_file():
             raise BadRequestError(f"{r.resume} is not a perga run (it has no case.toml)")
+        if changed := changed_geometry(r.resume):
+            raise BadRequestError(f"cannot resume: {'; '.join(changed)}")
         return load_case(r.resume / "case.toml"), None
     assert r.case is not None
     if r.start_from is not None:
@@ -85,48 +94,72 @@ def load(request: Request) -> tuple[Case, System | None]:
 
 
 def prepare(request: Request, case: Case, system: System | None) -> Prepared:
-    """The run directory of ``request`` made ready for ``case`` and ``system`` (:func:`load`'s):
-    BadRequestError for a run with nothing to resume, or a directory that holds a run (without
+    """The run directory of ``request`` locked (before anything in it is touched) and made
+    ready for ``case`` and ``system`` (:func:`load`'s): BadRequestError for a directory
+    another run holds, a run with nothing to resume, or a directory that holds a run (without
     ``overwrite``) or cannot be made."""
-    if request.resume is not None:
-        try:
-            check_resumable(request.resume)
-        except CheckpointError as exc:
-            raise BadRequestError(f"cannot resume: {exc}") from None
-        return Prepared(request, case, None, request.resume)
-    assert request.case is not None
-    directory = request.output or Path(case.output.directory.format(case=request.case.stem))
+    directory = request.resume or request.output
+    if directory is None:
+        assert request.case is not None
+        directory = Path(case.output.directory.format(case=request.case.stem))
+    lock = _lock(directory)
     try:
-        prepare_directory(directory, request.overwrite)
+        if request.resume is not None:
+            check_resumable(directory)
+        else:
+            prepare_directory(directory, request.overwrite)
+    except CheckpointError as exc:
+        lock.release()
+        raise BadRequestError(f"cannot resume: {exc}") from None
     except FileExistsError as exc:
+        lock.release()
         raise BadRequestError(str(exc)) from None
-    except OSError as exc:  # a file in the way, no permission, a read-only file system
-        raise BadRequestError(
-            f"cannot make the run directory {directory}: {exc.strerror or exc}; choose another "
-            "-o DIR"
-        ) from None
-    return Prepared(request, case, system, directory)
+    except OSError as exc:
+        lock.release()
+        raise _unusable(directory, exc) from None
+    return Prepared(request, case, system, directory, lock)
+
+
+def _lock(directory: Path) -> DirectoryLock:
+    """The lock of the run ``directory`` (BadRequestError if another run holds it or the
+    directory cannot be made)."""
+    try:
+        return DirectoryLock(directory)
+    except DirectoryLockedError as exc:
+        raise BadRequestError(str(exc)) from None
+    except OSError as exc:
+        raise _unusable(directory, exc) from None
+
+
+def _unusable(directory: Path, exc: OSError) -> BadRequestError:
+    """A run directory that cannot be made or written: a file in the way, no permission, a
+    read-only file system."""
+    return BadRequestError(
+        f"cannot make the run directory {directory}: {exc.strerror or exc}; choose another -o DIR"
+    )
 
 
 def execute(prepared: Prepared, progress: Progress | None = None) -> RunSummary:
     """Run (or go on with) the prepared run; the summary. BadRequestError where the run's
     checkpoints cannot be used; a stop signal, RunStoppedError or OSError (the run's output
-    cannot be written) propagate, everything written so far kept."""
-    if prepared.resume:
-        try:
-            return resume_run(prepared.case, prepared.directory, progress)
-        except CheckpointError as exc:
-            raise BadRequestError(f"cannot resume: {exc}") from None
-    request = prepared.request
-    assert request.case is not None
-    return run_case(
-        prepared.case,
-        request.case,
-        prepared.directory,
-        progress,
-        request.start_from or "",
-        system=prepared.system,
-    )
+    cannot be written) propagate, everything written so far kept. The directory's lock is
+    released at the end."""
+    with prepared.lock:
+        if prepared.resume:
+            try:
+                return resume_run(prepared.case, prepared.directory, progress)
+            except CheckpointError as exc:
+                raise BadRequestError(f"cannot resume: {exc}") from None
+        request = prepared.request
+        assert request.case is not None
+        return run_case(
+            prepared.case,
+            request.case,
+            prepared.directory,
+            progress,
+            request.start_from or "",
+            system=prepared.system,
+        )
 
 
 def outcome(summary: RunSummary, directory: Path) -> tuple[list[str], list[str], int]:

@@ -15,7 +15,7 @@ from perga.case.load import overridden, read_case_data
 from perga.case.schema import Case
 from perga.geometry.clearance import overlapping_pairs
 from perga.model.sizes import initial_radii
-from perga.output.tables import read_columns, table_path
+from perga.output.tables import TableError, read_columns, table_path
 from perga.run import checkpoints
 from perga.run.summary import FINISHED
 
@@ -35,8 +35,10 @@ def granules_of_run(run: Path, time: float | None = None) -> tuple[float, list[s
         raise RunStateError(f"{run} has no granule table (granules.csv or granules.parquet)")
     try:
         table = read_columns(path)
-    except (OSError, ValueError) as exc:
-        raise RunStateError(f"{path}: cannot read ({exc})") from None
+    except TableError as exc:
+        raise RunStateError(str(exc)) from None
+    except OSError as exc:
+        raise RunStateError(f"{path}: cannot read ({exc.strerror or exc})") from None
     times = table["time"]
     chosen = times if time is None else times[times <= time * (1 + 1e-12)]
     if chosen.size == 0:

@@ -96,8 +96,10 @@ def load_run(directory: Path | str, label: str = "") -> Run:
         if not (directory / needed).exists():
             raise FileNotFoundError(f"{directory} is not a run directory: no {needed}")
     summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
-    # the case file, named from the run directory (older runs: absolute)
-    origin = (directory / summary["case"]).parent if summary.get("case") else None
+    # the case file, named from the run directory (older runs: absolute); a run with its
+    # geometry files copied into it (perga.run.directory) finds them there
+    own = (directory / "geometry").is_dir()
+    origin = (directory / summary["case"]).parent if summary.get("case") and not own else None
     return Run(
         directory=directory,
         case=load_case(directory / "case.toml", origin if origin and origin.is_dir() else None),
