@@ -27,6 +27,7 @@ EXEMPT = {
     "PBSCluster": "submits workers to a PBS queue",
     "sbatch ": "submits to a SLURM queue",
     "qsub ": "submits to a PBS queue",
+    "--cluster ": "submits workers to a batch system (tests/studies/test_slurm.py runs it)",
 }
 """Text that makes a block one the tests cannot run here, and why."""
 

@@ -13,6 +13,7 @@ from perga.progress import counted, progress_bar
 
 if TYPE_CHECKING:
     from perga.case.schema import Case
+    from perga.studies.executor import BatchCluster
 
 BUNDLED_CASES = Path(__file__).resolve().parents[3] / "cases"
 
@@ -63,16 +64,47 @@ def study_options(parser: argparse.ArgumentParser) -> None:
 
 def cluster_options(parser: argparse.ArgumentParser) -> None:
     """The options of runs on Dask (:func:`cluster`) and their progress."""
-    parser.add_argument(
-        "--workers", type=at_least_one, help="local worker processes, >= 1 (default: free cores)"
-    )
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    where_options(parser)
     parser.add_argument("--retry-failed", action="store_true", help="run failed runs again")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def where_options(parser: argparse.ArgumentParser) -> None:
+    """Where runs on Dask execute: local workers, a running scheduler or a batch cluster."""
+    parser.add_argument(
+        "--workers", type=at_least_one, help="local worker processes, >= 1 (default: free cores)"
+    )
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    where.add_argument(
+        "--cluster",
+        dest="scheduler",
+        type=batch_cluster,
+        metavar="FILE.toml",
+        help="workers as SLURM or PBS jobs, as the cluster file says (docs/how-to/cluster.md)",
+    )
+
+
+def batch_cluster(text: str) -> BatchCluster:
+    """An argparse type: a cluster file read (:func:`perga.studies.executor.read_batch_cluster`),
+    with dask-jobqueue installed."""
+    from perga.studies.executor import read_batch_cluster
+
+    try:
+        import dask_jobqueue  # noqa: F401
+    except ImportError:
+        raise argparse.ArgumentTypeError(
+            "needs dask-jobqueue: pip install 'perga[cluster]'"
+        ) from None
+    try:
+        return read_batch_cluster(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def cluster(args: argparse.Namespace) -> dict[str, Any]:
-    """A study's Dask options from the command line: scheduler, workers, retry_failed."""
+    """A study's Dask options from the command line: scheduler (an address or a cluster
+    file's :class:`~perga.studies.executor.BatchCluster`), workers, retry_failed."""
     return {"scheduler": args.scheduler, "workers": args.workers, "retry_failed": args.retry_failed}
 
 

@@ -87,9 +87,26 @@ def _commands() -> tuple[_Command, dict[str, _Command]]:
         subparsers.append(action)
         return action
 
+    add_group = argparse.ArgumentParser.add_mutually_exclusive_group
+
+    def recording_add_group(self: argparse.ArgumentParser, **kw: Any) -> Any:
+        group = add_group(self, **kw)
+        add_to_group = group.add_argument
+
+        def recording_add_to_group(*args: Any, **options: Any) -> argparse.Action:
+            action = add_to_group(*args, **options)
+            arguments[id(self)].append(action)
+            return action
+
+        group.add_argument = recording_add_to_group
+        return group
+
     with (
         mock.patch.object(argparse.ArgumentParser, "add_argument", recording_add_argument),
         mock.patch.object(argparse.ArgumentParser, "add_subparsers", recording_add_subparsers),
+        mock.patch.object(
+            argparse.ArgumentParser, "add_mutually_exclusive_group", recording_add_group
+        ),
     ):
         parser = build_parser()
     (commands,) = subparsers

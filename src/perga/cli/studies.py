@@ -9,7 +9,14 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from perga.cli.common import AddParser, cluster, problems, study_options, with_progress
+from perga.cli.common import (
+    AddParser,
+    cluster,
+    problems,
+    study_options,
+    where_options,
+    with_progress,
+)
 
 if TYPE_CHECKING:
     from perga.studies.window import WindowStudy
@@ -210,12 +217,20 @@ def calibrate(args: argparse.Namespace) -> int:
         )
     except StudyError as exc:
         return problems(exc.problems)
+    except KeyboardInterrupt:
+        print(
+            f"interrupted: the runs finished so far are in {args.output}/runs; run the same "
+            "command again to resume",
+            file=sys.stderr,
+        )
+        raise
     write_plots(result, args.output)
     fit = result.fit
     for key, value, (lo, hi) in zip(fit.keys, fit.values, fit.intervals, strict=True):
         print(f"{key} = {value:.6g}  (95 %: {lo:.6g} to {hi:.6g})")
     print(
-        f"{fit.method}: {fit.runs} runs, residual sum of squares {fit.rss:.4g}, "
+        f"{fit.method}: {fit.runs} runs ({result.ran} run now, {fit.runs - result.ran} found "
+        f"finished), residual sum of squares {fit.rss:.4g}, "
         f"{time.perf_counter() - start:.1f} s -> {args.output}/best.toml, fit.json"
     )
     return 0
@@ -347,8 +362,7 @@ def add_parsers(add: AddParser) -> None:
         "--runs", type=int, default=100, help="surrogate, two-fidelity: most runs (default 100)"
     )
     parser.add_argument("-o", "--output", type=Path, required=True, help="output folder")
-    parser.add_argument("--workers", type=int, help="local worker processes")
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler")
+    where_options(parser)
     parser.add_argument(
         "--quiet", action="store_true", help="no progress lines (runs so far, best vector)"
     )

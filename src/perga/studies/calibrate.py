@@ -29,8 +29,11 @@ Every method writes its posterior sample, ``posterior.parquet`` (a column per fi
 least-squares one drawn from its linearised normal N(θ̂, s²(JᵀJ)⁻¹) within the bounds), which
 ``perga window --posterior`` draws its parameter sets from.
 
-Runs of an evaluation are study runs like any other (keyed by their resolved case), so an
-interrupted calibration resumes where it stopped and repeated points cost nothing.
+Runs of an evaluation are study runs like any other (keyed by their resolved case, each
+leaving its row in its directory): the same command run again in the same folder replays the
+method, every run found finished read back instead of run, so a calibration stopped midway
+(Ctrl-C, a killed process) goes on where it stopped and ends with the fit, and for ``bayes`` the
+chain, an uninterrupted one gives; repeated points cost nothing.
 """
 
 from __future__ import annotations
@@ -57,7 +60,7 @@ from perga.case.overrides import OverrideError, parse_value, split_override
 from perga.stats.metrics import METRICS
 from perga.studies.analytic_metrics import NoAnalyticModelError, analytic_model
 from perga.studies.column_units import split_unit, to_si
-from perga.studies.executor import dask_client, execute
+from perga.studies.executor import dask_client, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
 from perga.studies.study_file import StudyError, check_keys, check_metrics
 from perga.studies.surrogate import (
@@ -232,7 +235,8 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
 @dataclass
 class Model:
     """The simulated metrics of every data row for a vector of the fitted keys, evaluated in
-    batches on a Dask client; counts the runs it asked for."""
+    batches on a Dask client; counts the runs it asked for (``runs``) and those it ran
+    (``ran``: the others were found finished, :func:`perga.studies.executor.run_missing`)."""
 
     case: Path
     data: Data
@@ -242,6 +246,7 @@ class Model:
     function: Callable[[Job], dict[str, Any]] = run_job
     progress: Callable[[str], None] | None = None
     runs: int = 0
+    ran: int = 0
     cache: dict[tuple[float, ...], np.ndarray] = field(default_factory=dict)
     best: tuple[float, tuple[float, ...]] = (math.inf, ())
     """The smallest sum of squared residuals evaluated so far, and its vector."""
@@ -268,8 +273,11 @@ class Model:
         jobs = {key: self.jobs(np.array(key)) for key in todo}
         flat = {j.key: j for js in jobs.values() for j in js}
         rows: dict[str, dict[str, Any]] = {}
-        execute(
-            self.client, list(flat.values()), lambda r: rows.__setitem__(r["key"], r), self.function
+        self.ran += run_missing(
+            list(flat.values()),
+            lambda r: rows.__setitem__(r["key"], r),
+            client=self.client,
+            function=self.function,
         )
         self.runs += len(flat)
         for key, js in jobs.items():
@@ -282,8 +290,8 @@ class Model:
             rss, key = self.best
             values = ", ".join(f"{f.key} = {v:.6g}" for f, v in zip(self.fits, key, strict=True))
             self.progress(
-                f"calibrate: {self.runs} runs, {len(self.cache)} parameter vectors; best so far "
-                f"{values} (sum of squared residuals {rss:.4g})"
+                f"calibrate: {self.runs} runs ({self.ran} run now), {len(self.cache)} parameter "
+                f"vectors; best so far {values} (sum of squared residuals {rss:.4g})"
             )
         return np.stack([self.cache[tuple(map(float, t))] for t in thetas])
 
@@ -447,11 +455,13 @@ def best_case(case: Path, fit: Fit) -> str:
 @dataclass(frozen=True)
 class Calibration:
     """A finished calibration: the fit, the data it was fitted to and the simulated metrics at
-    the fit (data rows × metrics), for the plots (:mod:`perga.studies.calibrate_report`)."""
+    the fit (data rows × metrics), for the plots (:mod:`perga.studies.calibrate_report`), and
+    how many of the fit's runs ran now (the others were found finished)."""
 
     fit: Fit
     data: Data
     simulated: np.ndarray
+    ran: int = 0
 
 
 POSTERIOR = "posterior.parquet"
@@ -536,7 +546,7 @@ def calibrate(
     }
     (directory / "fit.json").write_text(json.dumps(record, indent=2, default=float) + "\n")
     write_posterior(fit, directory / POSTERIOR)
-    return Calibration(fit, data, simulated)
+    return Calibration(fit, data, simulated, model.ran)
 
 
 def write_posterior(fit: Fit, path: Path) -> None:
