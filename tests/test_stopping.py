@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import signal
 import sys
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -58,7 +59,9 @@ def _row(key: int) -> dict[str, Any]:
     return {"key": key}
 
 
-def test_a_study_stops_after_the_row_during_which_a_stop_was_swallowed(keeping: None) -> None:
+def test_a_study_stops_after_the_row_during_which_a_stop_was_swallowed(
+    keeping: None, tmp_path: Path
+) -> None:
     """Four jobs on an in-process cluster; a stop swallowed while the first row is handed over:
     ``execute`` raises it after that row and before any other."""
     from perga.studies.executor import execute
@@ -70,7 +73,7 @@ def test_a_study_stops_after_the_row_during_which_a_stop_was_swallowed(keeping: 
         if len(rows) == 1:
             _swallow_a_stop()
 
-    jobs = [type("Job", (), {"key": k})() for k in range(4)]
+    jobs = [type("Job", (), {"key": k, "directory": tmp_path / f"run-{k}"})() for k in range(4)]
     with (
         Client(processes=False, n_workers=1, dashboard_address=None) as client,
         pytest.raises(StopSignal),
