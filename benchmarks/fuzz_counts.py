@@ -1,11 +1,14 @@
-"""Issue 15, item 1 (must show): the fuzz counts. Mutants of the bundled cases, byte strings that
-are no case file, and bundled cases pointed at broken copies of their geometry files, drawn by
-the strategies of ``tests/case/test_fuzz.py`` (seeded): how many were refused with their
-problems (exit 2 in the CLI), loaded and built, loaded as parameter sets, and how many did
-anything else (a traceback: any count there is a defect) or took longer than 10 s.
+"""The fuzz counts. Mutants of the bundled cases, byte strings that are no case file, and
+bundled cases pointed at broken copies of their geometry files, drawn by the strategies of
+``tests/case/test_fuzz.py`` (seeded): how many were refused with their problems (exit 2 in the
+CLI), loaded and built, loaded as parameter sets, and how many did anything else (a traceback:
+any count there is a defect) or took longer than 10 s. Then mutants over every section of the
+schema and sets of ``--set`` overrides, each validated and, if accepted, run for a few steps in
+a worker process with a timeout (``tests/case/fuzz_worker.py``): mutants, refused, accepted
+(parameter sets), run, tracebacks and hangs.
 
-    python benchmarks/fuzz_counts.py    # 1,000 mutants, 200 byte strings, 300 geometry files
-    python benchmarks/fuzz_counts.py --cases 3000 --seed 7
+    python benchmarks/fuzz_counts.py    # 1,000 + 200 + 300 loaded; 2,000 + 1,000 run
+    python benchmarks/fuzz_counts.py --cases 3000 --every-section 4000 --sets 2000 --seed 7
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.case.test_fuzz
 
-from tests.case.test_fuzz import ROOT, SECONDS, broken_geometry, mutants
+from tests.case.test_fuzz import ROOT, SECONDS, broken_geometry, fuzz, mutants
 
 from perga.case import CaseError, load_case
 from perga.engine.simulation import Simulation
@@ -67,6 +70,10 @@ def main() -> None:
     parser.add_argument("--cases", type=int, default=1000, help="mutated case files")
     parser.add_argument("--bytes", type=int, default=200, help="random byte strings")
     parser.add_argument("--geometry", type=int, default=300, help="broken geometry files")
+    parser.add_argument(
+        "--every-section", type=int, default=2000, help="mutants over every section, run"
+    )
+    parser.add_argument("--sets", type=int, default=1000, help="sets of --set overrides, run")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
@@ -105,6 +112,18 @@ def main() -> None:
             shown = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
             print(f"{title}: {total} drawn (seed {args.seed}): {shown}; slowest {slowest[0]:.2f} s",
                   flush=True)  # fmt: skip
+        start = time.monotonic()
+        found, failures, largest = fuzz(folder, args.every_section, args.sets, args.seed)
+        print(
+            f"validated and run (seed {args.seed}): mutants {found['mutants']}, --set sets "
+            f"{found['override sets']}; refused {found['refused']}, accepted "
+            f"{found['accepted'] + found['ran']} (parameter sets, nothing to run: "
+            f"{found['accepted']}), run {found['ran']}, tracebacks {found['traceback']}, hangs "
+            f"{found['hang']}; {time.monotonic() - start:.0f} s"
+        )
+        for failure in failures:
+            print(f"  {failure[:400]}")
+        print(f"the worker's peak memory: {found['peak MB']} MB, reached with {largest[:300]}")
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ Problems read ``cases/x.toml: hammers.mass: must be > 0 (got -0.01)``; unknown k
 
 from __future__ import annotations
 
+import reprlib
 import tomllib
 import typing
 from collections.abc import Sequence
@@ -16,8 +17,23 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from perga.case.names import name_problems, unknown_key
-from perga.case.overrides import OverrideError, apply_overrides, split_override
+from perga.case.overrides import (
+    OverrideError,
+    apply_overrides,
+    parse_toml,
+    split_override,
+)
 from perga.case.schema import NOT_A_NUMBER, Case
+
+SHOWN = reprlib.Repr()
+"""How a problem quotes a value: long strings, numbers, lists and tables cut short."""
+SHOWN.maxstring = SHOWN.maxother = 80
+SHOWN.maxlist = SHOWN.maxtuple = 8
+SHOWN.maxdict = 12
+LONGEST_OVERRIDE = 100
+MOST_PROBLEMS = 20
+"""Problems of one file listed; the rest are counted."""
+"""Characters of an override a problem quotes before it cuts it short."""
 
 
 class CaseError(Exception):
@@ -86,10 +102,19 @@ def _describe(error: dict[str, Any]) -> str:
         options = list(owner.model_fields) if owner else []
         return f"{key}: {unknown_key(str(loc[-1]), options)}"
     message = error["msg"].removeprefix("Value error, ")
-    got = f" (got {error['input']!r})" if "input" in error and error["type"] != "missing" else ""
+    shown = "input" in error and error["type"] != "missing"
+    got = f" (got {SHOWN.repr(error['input'])})" if shown else ""
+    return f"{key or '(top level)'}: {message}{got}{_expected(tuple(error['loc']))}"
+
+
+def _expected(loc: tuple[Any, ...]) -> str:
+    """The description of the field at ``loc`` (its unit and range; for an item of a list, the
+    list's) as a problem ends with it, in brackets, or ""."""
+    while loc and isinstance(loc[-1], int):
+        loc = loc[:-1]
+    _, owner = _resolve(loc)
     field = owner.model_fields.get(str(loc[-1])) if owner and loc else None
-    expected = f" [{field.description}]" if field and field.description else ""
-    return f"{key or '(top level)'}: {message}{got}{expected}"
+    return f" [{field.description}]" if field and field.description else ""
 
 
 def _blamed(
@@ -119,16 +144,23 @@ def _blamed(
             for o in overrides
             if key == (name := split_override(o)[0]) or key.startswith((f"{name}.", f"{name}["))
         ]
-        sets = ", ".join(f"--set {o}" for o in named or overrides)
+        sets = ", ".join(f"--set {_shortened(o)}" for o in named or overrides)
         blamed.append(f"{path} with {sets}: {line}")
     return blamed
+
+
+def _shortened(override: str) -> str:
+    """``override`` as a problem quotes it: cut short after ``LONGEST_OVERRIDE`` characters."""
+    if len(override) <= LONGEST_OVERRIDE:
+        return override
+    return f"{override[:LONGEST_OVERRIDE]}... ({len(override)} characters)"
 
 
 def read_case_data(path: str | Path) -> dict[str, Any]:
     """The TOML data of a case file (:class:`CaseError` naming the file if it cannot be read)."""
     path = Path(path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return parse_toml(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise CaseError([f"{path}: cannot read ({exc.strerror})"]) from None
     except UnicodeDecodeError:
@@ -143,7 +175,7 @@ def overridden(data: dict[str, Any], overrides: Sequence[str], path: str | Path)
     try:
         return apply_overrides(data, [split_override(o) for o in overrides])
     except OverrideError as exc:
-        raise CaseError([f"{path}: {exc}"]) from None
+        raise CaseError([f"{path}: {exc}{_expected(exc.parts)}"]) from None
 
 
 def validate_case(data: dict[str, Any], path: str | Path, source_dir: Path | None = None) -> Case:
@@ -155,12 +187,19 @@ def validate_case(data: dict[str, Any], path: str | Path, source_dir: Path | Non
     try:
         case = Case.model_validate(data)
     except ValidationError as exc:
-        raise CaseError([f"{path}: {_describe(err)}" for err in exc.errors()]) from None
+        raise CaseError(_listed(path, [_describe(err) for err in exc.errors()])) from None
     case.attach_source(source_dir or path.resolve().parent, data, path=path)
     problems = name_problems(case)
     if problems:
-        raise CaseError([f"{path}: {problem}" for problem in problems])
+        raise CaseError(_listed(path, problems))
     return case
+
+
+def _listed(path: Path, problems: list[str]) -> list[str]:
+    """The first ``MOST_PROBLEMS`` problems, each naming ``path``, and how many more."""
+    listed = [f"{path}: {problem}" for problem in problems[:MOST_PROBLEMS]]
+    more = len(problems) - MOST_PROBLEMS
+    return listed + [f"{path}: ... and {more} more problems"] * (more > 0)
 
 
 def load_case(

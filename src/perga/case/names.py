@@ -54,6 +54,7 @@ def name_problems(case: Case) -> list[str]:
         for key, name in used
         if name not in names
     ]
+    problems += _repeated_pairs(case)
     if problems:
         return problems
     needed = [(case.granules.material, case.hammers.material)]
@@ -68,4 +69,19 @@ def name_problems(case: Case) -> list[str]:
             problems.append(
                 f"contacts: no entry for the pair [{a!r}, {b!r}], which this scene uses"
             )
+    return problems
+
+
+def _repeated_pairs(case: Case) -> list[str]:
+    """A [[contacts]] entry for a pair of materials that an entry before it already has."""
+    first: dict[tuple[str, ...], int] = {}
+    problems = []
+    for i, contact in enumerate(case.contacts):
+        pair = tuple(sorted(contact.pair))
+        if pair in first:
+            problems.append(
+                f"contacts[{i}].pair: {list(contact.pair)} is given again (first in "
+                f"contacts[{first[pair]}]): one entry per pair of materials"
+            )
+        first.setdefault(pair, i)
     return problems

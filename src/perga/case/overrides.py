@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import re
+import sys
 import tomllib
 from collections.abc import Iterable
 from typing import Any
@@ -29,13 +30,42 @@ _SEGMENT = re.compile(r"([^.\[\]]+)|\[(-?\d+)\]")
 
 
 class OverrideError(ValueError):
-    """An override that cannot be applied; the message names the override and what is allowed."""
+    """An override that cannot be applied; the message names the override and what is allowed,
+    ``parts`` the parts of the key it sets (:func:`key_parts`) where the problem is its value."""
+
+    def __init__(self, message: str, parts: tuple[str | int, ...] = ()) -> None:
+        super().__init__(message)
+        self.parts = parts
+
+
+class NumberTooLong(tomllib.TOMLDecodeError):
+    """TOML with an integer of more digits than Python reads (``sys.get_int_max_str_digits()``),
+    far beyond the range of every key."""
+
+
+def parse_toml(text: str) -> dict[str, Any]:
+    """The TOML ``text`` as tomllib reads it; an integer too long to read is
+    :class:`NumberTooLong` naming its line (tomllib lets Python's ValueError through)."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError:
+        limit = sys.get_int_max_str_digits()
+        number = re.search(rf"\d[\d_]{{{limit},}}", text)
+        where = f" (line {text.count(chr(10), 0, number.start()) + 1})" if number else ""
+        raise NumberTooLong(
+            f"an integer of more than {limit} digits{where}, beyond the range of every key"
+        ) from None
 
 
 def parse_value(text: str) -> Any:
-    """A TOML value, or the text itself when it is not one."""
+    """A TOML value, or the text itself when it is not one (:class:`NumberTooLong` for an
+    integer too long to read)."""
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        return parse_toml(f"v = {text}")["v"]
+    except NumberTooLong:
+        raise
     except tomllib.TOMLDecodeError:
         return text
 
@@ -45,10 +75,16 @@ def split_override(text: str) -> tuple[str, Any]:
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
         raise OverrideError(f"--set {text!r}: expected KEY=VALUE, e.g. rotor.rpm=2400")
-    return key.strip(), parse_value(value.strip())
+    key = key.strip()
+    try:
+        return key, parse_value(value.strip())
+    except NumberTooLong as exc:
+        message = f"--set {key}: {exc}".replace(" (line 1)", "")
+        raise OverrideError(message, tuple(key_parts(key))) from None
 
 
-def _segments(key: str) -> list[str | int]:
+def key_parts(key: str) -> list[str | int]:
+    """A dotted key's parts: table keys, and list indices as ints."""
     parts: list[str | int] = []
     pos = 0
     for match in _SEGMENT.finditer(key):
@@ -101,7 +137,7 @@ def apply_overrides(data: dict[str, Any], overrides: Iterable[tuple[str, Any]]) 
     """A copy of the TOML ``data`` with each (key, value) set (module doc for the keys)."""
     out = copy.deepcopy(data)
     for key, value in overrides:
-        parts = _segments(key)
+        parts = key_parts(key)
         if parts[0] == "contacts" and len(parts) > 1 and isinstance(parts[1], str):
             parts[1] = _contact_index(out, parts[1], key)
         node: Any = out

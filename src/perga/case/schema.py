@@ -7,6 +7,7 @@ range; ``perga schema`` prints the JSON Schema built from these models.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal, get_args, get_origin
@@ -16,6 +17,7 @@ from pydantic import (
     ConfigDict,
     Field,
     PrivateAttr,
+    field_validator,
     model_validator,
 )
 from pydantic_core import PydanticCustomError, core_schema
@@ -29,10 +31,10 @@ if TYPE_CHECKING:
 
 class Strict(BaseModel):
     """Base of every case-file table: unknown keys are errors, values are immutable, and a number
-    is a number: a string ("1500") or a boolean where only numbers are allowed is an error, not
-    converted (pydantic's lax mode would take both)."""
+    is a finite number: a string ("1500") or a boolean where only numbers are allowed is an
+    error, not converted (pydantic's lax mode would take both), and so are nan and ±inf."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     @model_validator(mode="before")
     @classmethod
@@ -51,6 +53,14 @@ class Strict(BaseModel):
                     )
         return data
 
+
+LONGEST = 3600.0
+"""Longest simulated time a case may ask for, s (solver.duration), and so the longest interval
+between two frames or checkpoints."""
+
+FINEST_STEP = 1e-12
+"""Smallest time step a case may give, s: the automatic step's least (a contact of the shortest
+duration, 1e-9 s, resolved by the most steps, 1000)."""
 
 NOT_A_NUMBER = "not_a_number"
 """The error type of a string or boolean given for a number (its key and value in ``ctx``)."""
@@ -673,7 +683,7 @@ class Solver(Strict):
 
     dt: float | Literal["auto"] = Field(
         "auto",
-        description="time step, s, in (0, 0.01], or 'auto' (from contact duration, tunnelling "
+        description="time step, s, in [1e-12, 0.01], or 'auto' (from contact duration, tunnelling "
         "and rotor turn); with soft contacts the granules' step",
     )
     substeps: int = Field(
@@ -684,7 +694,9 @@ class Solver(Strict):
         "[1, 1000]; soft contacts: 1 (see contact_model.granule_substeps)",
     )
     iterations: int = Field(10, ge=1, le=1000, description="Chipmunk solver iterations")
-    duration: float = Field(0.1, ge=1e-6, le=3600, description="simulated time, s, in [1e-6, 3600]")
+    duration: float = Field(
+        0.1, ge=1e-6, le=LONGEST, description="simulated time, s, in [1e-6, 3600]"
+    )
     seed: int = Field(0, ge=0, description="seed for anything random in the run, >= 0")
     ledger_tolerance: float = Field(
         0.01,
@@ -707,8 +719,8 @@ class Solver(Strict):
     def _dt_range(self) -> Solver:
         if self.threads != "auto" and not 1 <= self.threads <= 256:
             raise ValueError(f"solver.threads must be in [1, 256] or 'auto' (got {self.threads})")
-        if self.dt != "auto" and not 0 < self.dt <= 0.01:
-            raise ValueError(f"solver.dt must be in (0, 0.01] s or 'auto' (got {self.dt})")
+        if self.dt != "auto" and not FINEST_STEP <= self.dt <= 0.01:
+            raise ValueError(f"solver.dt must be in [1e-12, 0.01] s or 'auto' (got {self.dt})")
         return self
 
 
@@ -858,23 +870,27 @@ class Output(Strict):
 
     directory: str = Field("runs/{case}", description="output directory; {case} = file stem")
     every: float = Field(
-        1e-3, ge=1e-7, description="recording interval of the tables in simulated time, s, >= 1e-7"
+        1e-3,
+        ge=1e-7,
+        le=LONGEST,
+        description="recording interval of the tables in simulated time, s, in [1e-7, 3600]",
     )
     vtk_every: float | None = Field(
         None,
         ge=1e-7,
+        le=LONGEST,
         description="recording interval of the ParaView series ('vtk') in simulated time, s, "
-        ">= 1e-7; default: every (ParaView frames cost far more than table rows: a coarser "
+        "in [1e-7, 3600]; default: every (ParaView frames cost far more than table rows: a coarser "
         "interval makes a run with 'vtk' cheaper)",
     )
     record: tuple[
         Literal["granules", "hammers", "impacts", "energy", "releases", "outflow", "vtk"], ...
     ] = Field(
         ("granules", "hammers", "impacts", "energy", "vtk"),
-        description="what to write: CSV tables (granules, hammers, impacts: impacts.csv and "
-        "contacts.csv, each granule-hammer contact from start to end, energy, releases: "
-        "granules pulled from their cells, outflow: granules gone through the outlet) and 'vtk' "
-        "(ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
+        description="what to write, each named once: CSV tables (granules, hammers, impacts: "
+        "impacts.csv and contacts.csv, each granule-hammer contact from start to end, energy, "
+        "releases: granules pulled from their cells, outflow: granules gone through the "
+        "outlet) and 'vtk' (ParaView .pvd series in RUN/vtk/, see perga.output.vtk)",
     )
     granule_table: Literal["csv", "parquet"] = Field(
         "csv",
@@ -894,7 +910,8 @@ class Output(Strict):
     checkpoint_every: float = Field(
         0.1,
         ge=0.0,
-        description="simulated time between checkpoints, s, 0 (none) or >= 1e-4: the "
+        le=LONGEST,
+        description="simulated time between checkpoints, s, 0 (none) or in [1e-4, 3600]: the "
         "whole state in RUN/checkpoints/ (the last two kept), from which perga run --resume RUN "
         "goes on after a stop or a crash, bit for bit as if never stopped. A rigid run goes on "
         "from each checkpoint as a resumed one does, so this grid is part of its results "
@@ -924,6 +941,14 @@ class Output(Strict):
             )
         return self
 
+    @field_validator("record")
+    @classmethod
+    def _each_once(cls, record: tuple[str, ...]) -> tuple[str, ...]:
+        twice = sorted(name for name, n in Counter(record).items() if n > 1)
+        if twice:
+            raise ValueError(f"name each once ({', '.join(twice)} more than once)")
+        return record
+
     @model_validator(mode="after")
     def _vtk_3d_needs_vtk(self) -> Output:
         if self.vtk_3d and "vtk" not in self.record:
@@ -934,9 +959,9 @@ class Output(Strict):
 class Region(Strict):
     """A rectangle: ``centre`` (m), ``size`` (width, height, m), turned by ``angle`` (rad)."""
 
-    centre: tuple[float, float]
+    centre: tuple[float, float] = Field(description="centre of the rectangle, m")
     size: tuple[float, float] = Field(description="width and height, m, each > 0")
-    angle: float = 0.0
+    angle: float = Field(0.0, description="turn of the rectangle, rad (width along +x at 0)")
 
     @model_validator(mode="after")
     def _positive(self) -> Region:

@@ -3,7 +3,8 @@ container (the chamber), SI units.
 
 Discs against discs use a k-d tree (``scipy.spatial.cKDTree``): O(n log n), never all pairs.
 Discs against polygons and the container are vectorised over the discs, with a bounding-circle
-cull per polygon. ``allowed`` is an overlap accepted with the polygons and the container (a
+cull per polygon and, for the container, its inscribed circle about the origin (discs within
+it are inside). ``allowed`` is an overlap accepted with the polygons and the container (a
 granule resting on a floor sits at its static overlap), m.
 """
 
@@ -63,11 +64,17 @@ class Obstacles:
     container: FloatArray | None = None
     container_radius: float | None = None
     _bounds: list[tuple[FloatArray, float]] = field(default_factory=list, repr=False)
+    _inscribed: list[float] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
         for p in self.polygons:
             centre = p.mean(axis=0)
             self._bounds.append((centre, float(np.max(np.linalg.norm(p - centre, axis=1)))))
+        if self.container is not None:
+            origin = np.zeros((1, 2))
+            within = bool(inside(origin, self.container)[0])
+            nearest = float(_segment_distance(origin, self.container)[0]) if within else 0.0
+            self._inscribed.append(nearest * (1 - 1e-9))
 
     def clear(self, points: ArrayLike, radii: ArrayLike, allowed: float = 0.0) -> BoolArray:
         """Whether each disc (centre, radius) is clear of every polygon and inside the
@@ -82,8 +89,10 @@ class Obstacles:
                 hit = inside(q, polygon) | (_segment_distance(q, polygon) < r[near] - allowed)
                 ok[np.flatnonzero(near)[hit]] = False
         if self.container is not None:
-            ok &= inside(p, self.container)
-            ok &= _segment_distance(p, self.container) >= r - allowed
+            edge = np.linalg.norm(p, axis=1) + r > self._inscribed[0]  # else deep inside
+            q = p[edge]
+            ok[edge] &= inside(q, self.container)
+            ok[edge] &= _segment_distance(q, self.container) >= r[edge] - allowed
         if self.container_radius is not None:
             ok &= np.linalg.norm(p, axis=1) <= self.container_radius - r + allowed
         return ok

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from perga.geometry.properties import MassProperties
-from perga.geometry.units import GeometryError, unit_scale
+from perga.geometry.units import GeometryError, check_extent, unit_scale
 
 if TYPE_CHECKING:
     import trimesh
@@ -41,7 +41,8 @@ def check_closed(mesh: trimesh.Trimesh, source: str) -> None:
 def load_mesh(path: str | Path, units: str) -> trimesh.Trimesh:
     """Read a closed mesh file in ``units`` (e.g. 'mm'), scaled to metres, outward normals.
 
-    GeometryError naming the file for an unreadable, empty, open or non-manifold mesh.
+    GeometryError naming the file for an unreadable, empty, open or non-manifold mesh, or one
+    beyond ±10 m (:func:`~perga.geometry.units.check_extent`).
     """
     import trimesh  # here, not at import: it costs half a second of every run's start
 
@@ -57,6 +58,7 @@ def load_mesh(path: str | Path, units: str) -> trimesh.Trimesh:
         raise GeometryError(f"{source}: not a triangle mesh (got {type(mesh).__name__})")
     check_closed(mesh, source)
     mesh.apply_scale(scale)
+    check_extent(mesh.vertices, source)
     if mesh.volume < 0:
         mesh.invert()
     return mesh

@@ -1,9 +1,9 @@
 """2-D part outlines from files, validated: a points file (x y per line), an SVG path or
 polygon, or a DXF LWPOLYLINE/POLYLINE. Coordinates are in declared units, scaled to metres.
 
-Validation: at least 3 distinct vertices, closed, not self-intersecting, the hinge (if given)
-strictly inside; the outline is returned counter-clockwise, near-duplicate and collinear
-vertices removed.
+Validation: coordinates finite and within ±10 m, at least 3 distinct vertices, closed, not
+self-intersecting, the hinge (if given) strictly inside; the outline is returned
+counter-clockwise, near-duplicate and collinear vertices removed.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from perga.geometry.polygon import (
     counter_clockwise,
     self_intersection,
 )
-from perga.geometry.units import GeometryError, unit_scale
+from perga.geometry.units import GeometryError, check_extent, unit_scale
 
 POINTS_SUFFIXES = (".txt", ".xy", ".pts", ".csv")
 
@@ -42,6 +42,7 @@ def validate_outline(
 ) -> Outline:
     """Check and normalise raw outline vertices (m); GeometryError naming ``source``."""
     raw = as_points(points)
+    check_extent(raw, source)
     if not closed:
         raise GeometryError(
             f"{source}: the outline is not closed (close the path or polyline, or repeat "

@@ -1,6 +1,6 @@
 """Where the granules start: positions (m) and velocities (m/s) from a case's placement.
 
-Pure numpy, no Pymunk: the cross-checks and the mapping to the system share it.
+numpy and scipy, no Pymunk: the cross-checks and the mapping to the system share it.
 """
 
 from __future__ import annotations
@@ -10,6 +10,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from perga.case.schema import (
     Case,
@@ -19,7 +20,7 @@ from perga.case.schema import (
     RingPlacement,
     ShotPlacement,
 )
-from perga.geometry.clearance import Obstacles
+from perga.geometry.clearance import BoolArray, Obstacles
 from perga.model.hammer_geometry import hammer_geometry
 from perga.model.obstacles import initial_obstacles
 from perga.model.parts import chamber_spec, hammer_angles
@@ -41,8 +42,96 @@ def ring(count: int, radius: float, phase: float) -> FloatArray:
     return radius * np.column_stack((np.cos(angles), np.sin(angles)))
 
 
-CANDIDATE_BATCH = 256
-"""Candidate centres drawn, and checked against the obstacles, at a time."""
+CANDIDATE_BATCH = 1024
+"""Candidate centres drawn at a time."""
+
+WINDOW = 16
+"""Discs placed from one test of the candidates left in a batch (:meth:`_Pack.window`)."""
+
+
+class _Pack:
+    """A random pack under way: the discs of ``radii`` (m) placed so far, clear of each other
+    and of the ``obstacles``. A cell grid (cells of twice the largest radius) tests one
+    candidate exactly; a k-d tree of most placed discs and one call of the obstacles test many
+    candidates at once, refusing only those the exact test would refuse."""
+
+    def __init__(self, radii: FloatArray, obstacles: Obstacles | None) -> None:
+        self.radii, self.obstacles = radii, obstacles
+        self.cell = 2 * float(np.max(radii)) if len(radii) else 1.0
+        self.centres = np.empty((len(radii), 2))
+        self.count = 0
+        self.grid: dict[tuple[int, int], list[int]] = {}
+        self.tree: cKDTree | None = None
+        self.in_tree = 0
+
+    @property
+    def full(self) -> bool:
+        """Whether every disc is placed."""
+        return self.count == len(self.radii)
+
+    def batch(self, points: FloatArray) -> None:
+        """Place the next discs, each at the first of ``points`` (m, in order, each tried once)
+        where it overlaps nothing, until the points or the discs run out."""
+        start = 0
+        while start < len(points) and not self.full:
+            start = self.window(points, start)
+
+    def window(self, points: FloatArray, start: int) -> int:
+        """Place up to ``WINDOW`` discs at ``points[start:]``: those points first tested at once
+        at the smallest of their radii (:meth:`blocked`, the obstacles), the rest one by one
+        (the obstacles again at a larger radius); the index of the first point not tried."""
+        first, rest = self.count, points[start:]
+        smallest = float(self.radii[first : first + WINDOW].min())
+        free = ~self.blocked(rest, smallest)
+        if self.obstacles is not None:
+            free[free] = self.obstacles.clear(rest[free], np.full(np.count_nonzero(free), smallest))
+        candidates = np.flatnonzero(free)
+        clear_for, clear = smallest, np.ones(len(candidates), dtype=bool)
+        for i, j in enumerate(candidates):
+            (x, y), radius = rest[j], self.radii[self.count]
+            if self.overlaps(x, y, radius):
+                continue
+            if self.obstacles is not None and radius != clear_for:
+                clear_for = radius
+                left = rest[candidates[i:]]
+                clear[i:] = self.obstacles.clear(left, np.full(len(left), radius))
+            if not clear[i]:
+                continue
+            self.add(x, y)
+            if self.full or self.count == first + WINDOW:
+                return start + j + 1
+        return len(points)
+
+    def overlaps(self, x: float, y: float, radius: float) -> bool:
+        """Whether a disc of ``radius`` at (x, y) overlaps a placed one (exact)."""
+        ci, cj = math.floor(x / self.cell), math.floor(y / self.cell)
+        c, r = self.centres, self.radii
+        return any(
+            (c[k, 0] - x) ** 2 + (c[k, 1] - y) ** 2 < (radius + r[k]) ** 2
+            for di in (-1, 0, 1)
+            for dj in (-1, 0, 1)
+            for k in self.grid.get((ci + di, cj + dj), ())
+        )
+
+    def add(self, x: float, y: float) -> None:
+        """Place the next disc at (x, y)."""
+        cell = (math.floor(x / self.cell), math.floor(y / self.cell))
+        self.grid.setdefault(cell, []).append(self.count)
+        self.centres[self.count] = x, y
+        self.count += 1
+
+    def blocked(self, points: FloatArray, smallest: float) -> BoolArray:
+        """Points where a disc of radius >= ``smallest`` (m) overlaps a placed one: nearer the
+        nearest disc in the tree than ``smallest`` plus the smallest placed radius (less a
+        relative 1e-9: round-off never refuses a point the exact test takes). The tree is
+        rebuilt once the discs placed since it outnumber a sixteenth of it."""
+        if self.count - self.in_tree > self.in_tree // 16:
+            self.in_tree = self.count
+            self.tree = cKDTree(self.centres[: self.count])
+        if self.tree is None:
+            return np.zeros(len(points), dtype=bool)
+        distance, _ = self.tree.query(points, k=1)
+        return distance < (smallest + float(self.radii[: self.in_tree].min())) * (1 - 1e-9)
 
 
 def random_pack(
@@ -50,54 +139,33 @@ def random_pack(
 ) -> FloatArray:
     """Non-overlapping discs of ``radii`` (m) with centres uniform in the annulus
     inner ≤ r ≤ outer (m), clear of the ``obstacles`` (hammers, the chamber), by random
-    sequential addition with a cell grid (cells of twice the largest radius). Candidates are
-    drawn ``CANDIDATE_BATCH`` at a time, the numbers of ``sqrt(rng.uniform(inner², outer²))``
-    and ``rng.uniform(0, 2π)`` in turn, bit for bit, and checked against the obstacles in one
-    call per batch (again for the rest of it when the granule's radius changes).
+    sequential addition: each candidate centre, drawn ``CANDIDATE_BATCH`` at a time from the
+    numbers of ``sqrt(rng.uniform(inner², outer²))`` and ``rng.uniform(0, 2π)`` in turn, is the
+    next disc's if that disc overlaps nothing there (:class:`_Pack`).
 
-    Deterministic for a given seed. Raises :class:`PlacementError` when it cannot place them all.
+    Deterministic for a given seed. Raises :class:`PlacementError` when it cannot place them
+    all within ``MAX_ATTEMPTS_PER_GRANULE`` candidates per disc.
     """
     rng = np.random.default_rng(seed)
-    count = len(radii)
-    cell = 2 * float(np.max(radii)) if count else 1.0
-    grid: dict[tuple[int, int], list[int]] = {}
-    placed = np.empty((count, 2))
+    count, limit = len(radii), MAX_ATTEMPTS_PER_GRANULE * len(radii)
+    pack = _Pack(radii, obstacles)
     lo, span = inner**2, outer**2 - inner**2
-    n, attempts = 0, 0
-    while n < count:
+    attempts = 0
+    while not pack.full:
+        if attempts >= limit:
+            raise PlacementError(
+                f"random placement fitted only {pack.count} of {count} granules (radii up to "
+                f"{pack.cell / 2:g} m) in the annulus [{inner:g}, {outer:g}] m clear of the "
+                "hammers and the wall: use fewer granules or a wider annulus"
+            )
         u = rng.random(2 * CANDIDATE_BATCH)
         distance, theta = np.sqrt(lo + span * u[0::2]), 2 * math.pi * u[1::2]
-        points = [(d * math.cos(t), d * math.sin(t)) for d, t in zip(distance, theta, strict=True)]
-        clear_for, clear = math.nan, np.ones(CANDIDATE_BATCH, dtype=bool)
-        for j, (x, y) in enumerate(points):
-            if n == count:
-                break
-            attempts += 1
-            if attempts > MAX_ATTEMPTS_PER_GRANULE * count:
-                raise PlacementError(
-                    f"random placement fitted only {n} of {count} granules (radii up to "
-                    f"{cell / 2:g} m) in the annulus [{inner:g}, {outer:g}] m clear of the "
-                    "hammers and the wall: use fewer granules or a wider annulus"
-                )
-            ci, cj = math.floor(x / cell), math.floor(y / cell)
-            rn = radii[n]
-            if any(
-                (placed[k, 0] - x) ** 2 + (placed[k, 1] - y) ** 2 < (rn + radii[k]) ** 2
-                for di in (-1, 0, 1)
-                for dj in (-1, 0, 1)
-                for k in grid.get((ci + di, cj + dj), ())
-            ):
-                continue
-            if obstacles is not None:
-                if rn != clear_for:
-                    clear_for = rn
-                    clear[j:] = obstacles.clear(points[j:], np.full(len(points) - j, rn))
-                if not clear[j]:
-                    continue
-            placed[n] = x, y
-            grid.setdefault((ci, cj), []).append(n)
-            n += 1
-    return placed
+        points = np.array(
+            [(d * math.cos(t), d * math.sin(t)) for d, t in zip(distance, theta, strict=True)]
+        )
+        pack.batch(points[: limit - attempts])
+        attempts += len(points)
+    return pack.centres
 
 
 def comb(placement: CombPlacement) -> FloatArray:
