@@ -180,3 +180,24 @@ def test_a_given_step_no_finer_than_a_picosecond(dt: str, taken: bool) -> None:
     if not taken:
         (problem,) = problems
         assert f"solver.dt must be in [1e-12, 0.01] s or 'auto' (got {float(dt)})" in problem
+
+
+@pytest.mark.parametrize("plan_fails", [False, True])
+def test_a_step_plan_that_fails_unreported_is_a_problem_not_an_assertion(
+    monkeypatch, plan_fails: bool
+) -> None:
+    """Should the step plan refuse a case that no check reported (the cross-checks name an
+    unreachable restitution), validation names it as a problem instead of failing an assert."""
+    import perga.model.compile as compile_module
+
+    def refuse(_case):
+        raise ValueError("no damping reaches this restitution")
+
+    if plan_fails:
+        monkeypatch.setattr(compile_module, "step_plan", refuse)
+    problems = refusal(ONE)
+    assert problems == (
+        [f"{ONE}: solver: no time step for this case (no damping reaches this restitution)"]
+        if plan_fails
+        else []
+    ), problems

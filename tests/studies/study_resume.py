@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -199,6 +200,8 @@ def check_resumed(resumed: Resumed, signum: int, reference: Path) -> None:
     if signum == signal.SIGINT:
         assert resumed.stopped == 130, resumed.stopped_err
         assert "run the same command again to resume" in resumed.stopped_err
+        named = re.search(r"the runs finished so far are in (\S+);", resumed.stopped_err)
+        assert named and Path(named.group(1)).exists(), resumed.stopped_err
     else:
         assert resumed.stopped == -signal.SIGKILL
     everything = rows_on_disk(reference)

@@ -10,6 +10,8 @@ import csv
 import json
 import math
 import signal
+import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -92,3 +94,38 @@ def test_a_stopped_calibration_resumes_to_the_uninterrupted_fit(
     assert (out / "best.toml").read_text() == (reference / "best.toml").read_text()
     same_table(out / "posterior.parquet", reference / "posterior.parquet")
     assert np.isfinite(fit["values"]).all() and fit["runs"] == total
+
+
+@pytest.mark.slow
+def test_a_real_calibration_stopped_by_sigint_resumes_to_the_same_fit(tmp_path: Path) -> None:
+    """The worked example's least-squares fit with real runs (70 runs of the rebound test, about
+    10 s on two workers), stopped by SIGINT once a third of its rows are on disk and run again:
+    every row found on disk stays the same file (no finished run ran again), and fit.json and
+    best.toml equal an uninterrupted calibration's."""
+    data = ROOT / "examples" / "calibration" / "measured.csv"
+
+    def command(out: Path) -> list[str]:
+        return ["perga", "calibrate", str(CASE), "--data", str(data), "--fit",
+                "contacts.granule-hammer.restitution=0.4:0.95", "--workers", "2", "--quiet",
+                "-o", str(out)]  # fmt: skip
+
+    reference, out = tmp_path / "reference", tmp_path / "calibration"
+    subprocess.run(command(reference), check=True, capture_output=True, timeout=600)
+    total = len(list((reference / "runs").glob("*/row.json")))
+    proc = subprocess.Popen(command(out), stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + 300
+    while len(list((out / "runs").glob("*/row.json"))) < total // 3:
+        assert proc.poll() is None and time.monotonic() < end, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    between = {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in out.glob("runs/*/row.json")}
+    assert 0 < len(between) < total
+    done = subprocess.run(command(out), capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in between} == between
+    assert len(list(out.glob("runs/*/row.json"))) == total
+    fit, expected = (json.loads((d / "fit.json").read_text()) for d in (out, reference))
+    assert fit["values"] == expected["values"] and fit["rss"] == expected["rss"]
+    assert (out / "best.toml").read_text() == (reference / "best.toml").read_text()

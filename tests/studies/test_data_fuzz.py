@@ -86,6 +86,8 @@ def _with(line: int, column: int, value: str) -> str:
         (_with(3, 2, "inf"), "line 3, column first_impact_restitution_sd: must be a finite"),
         (_with(3, 2, "0"), "line 3, column first_impact_restitution_sd: must be a finite"),
         (_with(5, 0, "99"), "line 5, condition columns"),
+        (_with(5, 0, "9" * 4300), "line 5, condition columns: "),
+        (_with(5, 0, "9" * 4301), "line 5, condition columns: an integer of more than 4300"),
         (DATA.replace("0.6,0.726383,0.01,", "0.6,0.726383,", 1), "line 4: 5 cells expected"),
         (_with(1, 4, "first_impact_restitution"), "line 1: every column needs a name"),
     ],

@@ -33,7 +33,8 @@ lifetime_stagger = "1s"
 log_directory = "logs"
 """
 """Two one-core jobs at a time whose workers leave 3-5 s after they start: a run takes 0.2-2 s,
-so most leave in the middle of one."""
+so most leave in the middle of one, and two workers can do at most 10 s of the study before
+jobs must replace them."""
 
 
 def slurm_idle() -> str | None:
@@ -144,10 +145,11 @@ def on_slurm(study: list[str | Path], tmp_path: Path, cluster_file: Path) -> tup
 
 @pytest.mark.slow
 def test_a_sweep_on_slurm_loses_and_repeats_nothing(slurm, tmp_path, cluster_file):
-    """40 runs on jobs whose workers leave mid-study: every run's row once, equal to a local
-    sweep's."""
+    """120 runs on jobs whose workers leave mid-study: every run's row once, equal to a local
+    sweep's. At about 0.2 s a run the study is about 24 s of work, more than the first two
+    workers can do, so jobs must replace them."""
     study = [
-        "sweep", CASE, "--set", "granules.placement.angle=0.2:1.4:40",
+        "sweep", CASE, "--set", "granules.placement.angle=0.2:1.4:120",
         "--metric", "first_impact_tangential_restitution_centre",
     ]  # fmt: skip
     out, twice = on_slurm(study, tmp_path, cluster_file)
@@ -158,8 +160,8 @@ def test_a_sweep_on_slurm_loses_and_repeats_nothing(slurm, tmp_path, cluster_fil
         for d in (out, tmp_path / "local")
     )
     assert twice == 0, f"{twice} finished runs ran again"
-    assert len(slurm) == 40 and (slurm["status"] == "ok").all(), slurm[["key", "status"]]
-    assert len(list(out.glob("runs/*/row.json"))) == 40
+    assert len(slurm) == 120 and (slurm["status"] == "ok").all(), slurm[["key", "status"]]
+    assert len(list(out.glob("runs/*/row.json"))) == 120
     pd.testing.assert_frame_equal(slurm[kept], local[kept])
 
 

@@ -19,7 +19,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from perga.cli import main
-from perga.studies.study_file import Parameter, Study
+from perga.studies.study_file import Parameter, Study, StudyError, study_from_options
 from perga.studies.sweep import sweep
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -205,3 +205,37 @@ def test_a_valid_range_is_accepted(tmp_path: Path) -> None:
         '"rotor.omega" = { range = [1e-4, 1.0001e-4], points = 2 }\n'
     )
     assert load_study(study).parameters["rotor.omega"].range == (1e-4, 1.0001e-4)
+
+
+@pytest.mark.parametrize("digits", [4300, 4301])
+def test_a_sweep_value_of_thousands_of_digits_is_refused(digits: int) -> None:
+    """Up to Python's limit (4300 digits) a value out of the key's range, beyond it a number
+    too long to read: a StudyError naming the --set either way, never a traceback."""
+    case = Path(__file__).resolve().parents[2] / "cases" / "rebound-test.toml"
+    text = f"granules.placement.angle=0.5,{'9' * digits}"
+    with pytest.raises(StudyError) as caught:
+        study_from_options(case, [text], ["first_impact_restitution"])
+    (problem,) = caught.value.problems
+    if digits > 4300:
+        assert problem.startswith(f"--set {text[:77]}...: an integer of more than 4300 digits")
+    else:
+        assert problem.startswith("--set: ") and "granules.placement.angle: " in problem
+        assert "[angle of the path, rad" in problem
+    assert len(problem) < 400
+
+
+@pytest.mark.parametrize(
+    ("values", "refused"), [("0.2,1.5", False), ("0.2,1.6", True), ("0.2:1.6:3", True)]
+)
+def test_every_value_of_a_sweep_is_checked_not_only_the_first(values, refused) -> None:
+    """The largest of a sweep's values, or a range's end, out of the key's range is refused
+    before any run (the first value alone was checked)."""
+    case = Path(__file__).resolve().parents[2] / "cases" / "rebound-test.toml"
+    try:
+        study_from_options(
+            case, [f"granules.placement.angle={values}"], ["first_impact_restitution"]
+        )
+    except StudyError as exc:
+        assert refused and "granules.placement.angle: " in exc.problems[0], exc.problems
+    else:
+        assert not refused

@@ -108,16 +108,21 @@ def cluster(args: argparse.Namespace) -> dict[str, Any]:
     return {"scheduler": args.scheduler, "workers": args.workers, "retry_failed": args.retry_failed}
 
 
-def with_progress(args: argparse.Namespace, call: Callable[[Callable[[int, int], None]], T]) -> T:
+def with_progress(
+    args: argparse.Namespace,
+    call: Callable[[Callable[[int, int], None]], T],
+    rows: str = "results.parquet",
+) -> T:
     """``call(progress)`` under a progress bar (unless ``args.quiet``); after a stop signal it
-    says where the finished runs are and how to resume, and re-raises."""
+    says where the finished runs are (``rows`` in the study's folder) and how to resume, and
+    re-raises."""
     bar = progress_bar(0, "runs", f"perga {args.command}", args.quiet)
     try:
         return call(counted(bar))
     except KeyboardInterrupt:
         bar.close()
         print(
-            f"interrupted: the runs finished so far are in {args.output}/results.parquet; "
+            f"interrupted: the runs finished so far are in {args.output}/{rows}; "
             "run the same command again to resume",
             file=sys.stderr,
         )

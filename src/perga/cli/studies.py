@@ -124,7 +124,7 @@ def window(args: argparse.Namespace) -> int:
 
 def _window_adaptive(args: argparse.Namespace, study: WindowStudy) -> int:
     """The window's boundary from at most ``--adaptive BUDGET`` runs."""
-    from perga.studies.window_adaptive import run_adaptive
+    from perga.studies.window_adaptive import RUNS, run_adaptive
     from perga.studies.window_adaptive_report import write_adaptive
 
     xs, ys = study.grid()
@@ -135,6 +135,7 @@ def _window_adaptive(args: argparse.Namespace, study: WindowStudy) -> int:
             lambda progress: run_adaptive(
                 study, args.output, budget=args.adaptive, progress=progress, **cluster(args)
             ),
+            rows=RUNS,
         )
     except ValueError as exc:
         return problems([f"--adaptive: {exc}"])

@@ -252,8 +252,10 @@ def compile_case(case: Case) -> System:
         problems += check(case)
     try:
         plan = step_plan(case)
-    except ValueError:  # an unreachable restitution, which checks.contact_model reports
+    except ValueError as exc:  # an unreachable restitution, which checks.contact_model reports
         plan = None
+        if not problems:
+            problems.append(f"solver: no time step for this case ({exc})")
     if plan is not None:
         problems += checks.time_step(case, plan)
     if problems:

@@ -56,11 +56,11 @@ from scipy import optimize, stats
 
 from perga import __version__
 from perga.case.load import overridden, read_case_data
-from perga.case.overrides import OverrideError, parse_value, split_override
+from perga.case.overrides import NumberTooLong, OverrideError, parse_value, split_override
 from perga.stats.metrics import METRICS
 from perga.studies.analytic_metrics import NoAnalyticModelError, analytic_model
 from perga.studies.column_units import split_unit, to_si
-from perga.studies.executor import dask_client, run_missing
+from perga.studies.executor import BatchCluster, dask_client, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job, run_job, toml_value
 from perga.studies.study_file import StudyError, check_keys, check_metrics
 from perga.studies.surrogate import (
@@ -203,7 +203,11 @@ def load_data(path: str | Path, case: Path, fits: list[FitKey]) -> Data:
     )
     rows: list[dict[str, Any]] = []
     for k, (i, record) in enumerate(table):
-        rows.append({c: _condition(record[c], factors.get(c, 1.0)) for c in conditions})
+        try:
+            rows.append({c: _condition(record[c], factors.get(c, 1.0)) for c in conditions})
+        except NumberTooLong as exc:
+            problems.append(f"{path}: line {i}, condition columns: {exc}")
+            continue
         for j, m in enumerate(metrics):
             values[k, j] = _finite(record[m]) * factors.get(m, 1.0)
             if not math.isfinite(values[k, j]):
@@ -483,7 +487,7 @@ def calibrate(
     steps: int = 100,
     runs: int = 100,
     client: Client | None = None,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     function: Callable[[Job], dict[str, Any]] = run_job,
     progress: Callable[[str], None] | None = None,

@@ -38,6 +38,7 @@ from distributed import Client, LocalCluster, as_completed
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from perga.case.names import unknown_key
+from perga.case.overrides import parse_toml
 from perga.cores import free_cores
 from perga.stopping import raise_swallowed
 from perga.studies.jobs import Job, failed_row, finished_row, run_job
@@ -169,7 +170,7 @@ def read_batch_cluster(path: str | Path) -> BatchCluster:
     bad key with what it allows."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = parse_toml(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise ValueError(f"{path}: not a readable TOML file ({exc})") from None
     try:

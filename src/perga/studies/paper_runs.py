@@ -19,7 +19,7 @@ from perga.analytic.sliding import BladeSlide
 from perga.case import load_case
 from perga.run import LEDGER_OFF
 from perga.stats.tables import Run, load_run
-from perga.studies.executor import Progress, run_missing
+from perga.studies.executor import BatchCluster, Progress, run_missing
 from perga.studies.jobs import Job, make_job
 
 RECORD = 'output.record=["granules", "hammers", "impacts", "energy"]'
@@ -110,7 +110,7 @@ def run_paper_study(
     work: Path,
     *,
     client: Client | None = None,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,

@@ -31,7 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from perga.case import CaseError
 from perga.case.load import overridden, read_case_data, validate_case
 from perga.case.names import unknown_key
-from perga.case.overrides import parse_value
+from perga.case.overrides import NumberTooLong, parse_toml, parse_value
 from perga.model.compile import check
 from perga.stats.metrics import METRICS, parse_metric
 
@@ -121,12 +121,35 @@ def check_keys(case_path: Path, keys: dict[str, object], where: str) -> list[str
     return []
 
 
+def extremes(parameter: Parameter) -> list[object]:
+    """The values of ``parameter`` that stand for all in a check of the case: a range's ends,
+    the smallest and largest of its numbers and each of its other values (a key's limits are
+    intervals)."""
+    if parameter.range is not None:
+        return list(parameter.range)
+    values = parameter.values or []
+    numbers = [v for v in values if isinstance(v, int | float) and not isinstance(v, bool)]
+    others = [v for v in dict.fromkeys(values) if v not in numbers]
+    return [*dict.fromkeys([min(numbers), max(numbers)] if numbers else []), *others]
+
+
+def check_parameters(case_path: Path, parameters: dict[str, Parameter], where: str) -> list[str]:
+    """Problems of the case with each parameter at each of its :func:`extremes`, the others at
+    their first value; each problem once."""
+    first = {k: extremes(p)[0] for k, p in parameters.items()}
+    problems = check_keys(case_path, first, where)
+    for key, parameter in parameters.items():
+        for value in extremes(parameter)[1:]:
+            problems += check_keys(case_path, {**first, key: value}, where)
+    return list(dict.fromkeys(problems))
+
+
 def load_study(path: str | Path) -> Study:
     """A checked study: schema, metric names, the base case, and every parameter's key with its
-    first value (StudyError listing every problem)."""
+    :func:`extremes` (StudyError listing every problem)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        data = parse_toml(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as exc:
         raise StudyError([f"{path}: cannot read ({exc})"]) from None
     except tomllib.TOMLDecodeError as exc:
@@ -145,11 +168,7 @@ def load_study(path: str | Path) -> Study:
     if is_file is False:
         problems.append(f"{path}: case: no such file {study.case}")
     elif is_file:
-        first = {
-            k: (p.values[0] if p.values is not None else p.range[0])  # type: ignore[index]
-            for k, p in study.parameters.items()
-        }
-        problems += check_keys(study.case, first, f"{path}: parameters")
+        problems += check_parameters(study.case, study.parameters, f"{path}: parameters")
     if problems:
         raise StudyError(problems)
     return study
@@ -167,6 +186,8 @@ def parse_values(text: str, where: str) -> Parameter:
             raise StudyError([f"{where}: LO:HI:N needs LO < HI and N >= 2 ({message})"]) from None
     try:
         return Parameter(values=[parse_value(v.strip()) for v in text.split(",")])
+    except NumberTooLong as exc:
+        raise StudyError([f"{where}: {exc}"]) from None
     except ValidationError:
         raise StudyError(
             [f"{where}: a study's values are numbers, strings or booleans (V1,V2,... or "
@@ -191,16 +212,13 @@ def study_from_options(
             problems.append(f"--set {text!r}: expected KEY=V1,V2,... or KEY=LO:HI:N")
             continue
         try:
-            parameters[key.strip()] = parse_values(values, f"--set {text}")
+            shown = text if len(text) <= 80 else f"{text[:77]}..."
+            parameters[key.strip()] = parse_values(values, f"--set {shown}")
         except StudyError as exc:
             problems += exc.problems
     problems += check_metrics(metrics, "--metric")
     if parameters:
-        first = {
-            k: (p.values[0] if p.values is not None else p.range[0])  # type: ignore[index]
-            for k, p in parameters.items()
-        }
-        problems += check_keys(case, first, "--set")
+        problems += check_parameters(case, parameters, "--set")
     if problems:
         raise StudyError(problems)
     return Study(

@@ -25,7 +25,7 @@ from distributed import Client
 
 from perga.stats.metrics import METRICS
 from perga.studies.design import points
-from perga.studies.executor import Progress, run_missing
+from perga.studies.executor import BatchCluster, Progress, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job
 from perga.studies.study_file import Study
 from perga.studies.user_units import si_label
@@ -96,7 +96,7 @@ def sweep(
     directory: Path,
     *,
     client: Client | None = None,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,

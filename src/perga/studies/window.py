@@ -25,7 +25,7 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from perga.studies.design import axis
-from perga.studies.executor import Progress
+from perga.studies.executor import BatchCluster, Progress
 from perga.studies.jobs import toml_value
 from perga.studies.pareto import pareto_front
 from perga.studies.study_file import Study, StudyError, study_from_options
@@ -399,7 +399,7 @@ def run_window(
     window: WindowStudy,
     directory: Path,
     *,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,

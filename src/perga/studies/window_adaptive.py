@@ -16,7 +16,7 @@ from typing import Any
 
 from perga.studies.adaptive import AdaptiveResult, adaptive_window
 from perga.studies.design import points
-from perga.studies.executor import Progress, dask_client, run_missing
+from perga.studies.executor import BatchCluster, Progress, dask_client, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job, run_job
 from perga.studies.sweep import write_table
 from perga.studies.window import WindowStudy
@@ -47,7 +47,7 @@ def run_adaptive(
     *,
     budget: int,
     tolerance: float = 0.1,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,

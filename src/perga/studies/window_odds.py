@@ -25,7 +25,7 @@ from perga.case.load import overridden, read_case_data
 from perga.case.overrides import apply_overrides
 from perga.studies.calibrate import POSTERIOR
 from perga.studies.design import points
-from perga.studies.executor import Progress, run_missing
+from perga.studies.executor import BatchCluster, Progress, run_missing
 from perga.studies.jobs import Job, derived_seed, make_job, run_job
 from perga.studies.study_file import StudyError
 from perga.studies.sweep import RESULTS, write_table
@@ -118,7 +118,7 @@ def run_odds(
     seeds: int,
     directory: Path,
     *,
-    scheduler: str | None = None,
+    scheduler: str | BatchCluster | None = None,
     workers: int | None = None,
     retry_failed: bool = False,
     progress: Progress | None = None,
