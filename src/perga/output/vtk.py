@@ -1,6 +1,6 @@
-"""ParaView output: binary, zlib-compressed ``.vtu`` files written by VTK (:mod:`perga.output.
-vtk_grid`) and
-``.pvd`` collections whose ``timestep`` is simulated time, s (design notes, section 6).
+"""ParaView output: binary, zlib-compressed ``.vtu`` files (VTK's XML format,
+:mod:`perga.output.vtk_grid`) and ``.pvd`` collections whose ``timestep`` is simulated time, s
+(design notes, section 6).
 
 Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
 
@@ -63,7 +63,6 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 from numpy.typing import NDArray
-from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 from perga.geometry.polygon import outline_or_circle
 from perga.model.frame import Frame, MachineFrame
@@ -71,7 +70,7 @@ from perga.model.records import Events, Impact
 from perga.model.system import System
 from perga.output import paraview_state, vtk3d, vtk_grid
 from perga.output.files import reopen_at
-from perga.output.vtk_grid import POLY_LINE, POLYGON
+from perga.output.vtk_grid import POLY_LINE, POLYGON, Grid
 
 FloatArray = NDArray[np.float64]
 
@@ -129,7 +128,7 @@ class PvdSeries:
         """The ``.pvd`` file."""
         return self.directory / f"{self.name}.pvd"
 
-    def add(self, time: float, mesh: vtkUnstructuredGrid) -> None:
+    def add(self, time: float, mesh: Grid) -> None:
         """Write ``mesh`` as the frame at ``time`` (s), then add it to the index."""
         file = f"{self.name}_{len(self.entries):06d}.vtu"
         vtk_grid.save(mesh, self.directory / file)
@@ -164,7 +163,7 @@ class PvdSeries:
             self._fd = None
 
 
-def _polylines(lines: list[NDArray[np.int64]], points: FloatArray) -> vtkUnstructuredGrid:
+def _polylines(lines: list[NDArray[np.int64]], points: FloatArray) -> Grid:
     """One VTK_POLY_LINE through ``points`` (m) per list of point indices in ``lines``."""
     offsets = np.cumsum([0] + [len(line) for line in lines])
     return vtk_grid.grid(points, POLY_LINE, offsets, np.concatenate(lines))
@@ -406,7 +405,7 @@ def machine_mesh(
     origins: FloatArray,
     angles: FloatArray,
     cell_data: dict[str, NDArray],
-) -> vtkUnstructuredGrid:
+) -> Grid:
     """The parts (``outlines`` in their own frames, m) posed at ``origins`` (m) and ``angles``
     (rad), as polygons with ``cell_data``."""
     posed = []

@@ -32,13 +32,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid
 
 from perga.geometry.extrude import extrude
 from perga.geometry.polygon import FloatArray, clean, counter_clockwise, signed_area
 from perga.geometry.wall import wall_pieces
 from perga.output import vtk_grid
-from perga.output.vtk_grid import TRIANGLE
+from perga.output.vtk_grid import TRIANGLE, Grid
 
 if TYPE_CHECKING:
     import trimesh
@@ -69,7 +68,7 @@ def _triangles(
     vertices: FloatArray,
     triangles: NDArray[np.int64],
     cell_data: dict[str, NDArray] | None = None,
-) -> vtkUnstructuredGrid:
+) -> Grid:
     offsets = np.arange(0, 3 * len(triangles) + 1, 3, dtype=np.int64)
     return vtk_grid.grid(vertices, TRIANGLE, offsets, triangles.ravel(), cell_data=cell_data)
 
@@ -89,9 +88,7 @@ class Machine3D:
         self.vertex_part = np.repeat(np.arange(len(parts)), sizes)
         self.triangle_counts = np.array([len(p.triangles) for p in parts])
 
-    def mesh(
-        self, origins: FloatArray, angles: FloatArray, cell_data: dict[str, NDArray]
-    ) -> vtkUnstructuredGrid:
+    def mesh(self, origins: FloatArray, angles: FloatArray, cell_data: dict[str, NDArray]) -> Grid:
         """The parts with their frames at ``origins`` (m) turned by ``angles`` (rad);
         ``cell_data`` holds one value per part."""
         angle = np.asarray(angles)[self.vertex_part]
@@ -135,6 +132,6 @@ def wall(inner: ArrayLike, wall_thickness: float, height: float) -> Part:
     return Part(np.array(mesh.vertices, dtype=float), np.array(mesh.faces, dtype=np.int64))
 
 
-def part_grid(part: Part) -> vtkUnstructuredGrid:
+def part_grid(part: Part) -> Grid:
     """A part as VTK_TRIANGLE cells."""
     return _triangles(part.vertices, part.triangles)

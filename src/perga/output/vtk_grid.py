@@ -1,42 +1,63 @@
-"""Unstructured grids built from NumPy arrays and written as ``.vtu`` files, through VTK itself.
+"""Unstructured grids built from NumPy arrays and written as ``.vtu`` files (VTK's XML format).
 
-Every ParaView file of a run goes through here: :func:`grid` makes a ``vtkUnstructuredGrid`` of
-one cell type from points, cell offsets and connectivity, with point and cell data; :func:`save`
-writes it with VTK's XML writer, binary data zlib-compressed inline (base64) in each
-``DataArray``, the layout pyvista writes (ParaView reads every layout; meshio 5.3 misreads the
-raw appended one, whose offsets VTK pads with spaces: meshio issue #1135). VTK is called
-directly rather than through pyvista, whose objects cost about 1.5 ms more per 300-granule frame
-to build and save than the write itself (docs/dev/performance.md); the files hold the same arrays.
+Every ParaView file of a run goes through here: :func:`grid` gathers the points, cells (one
+type) and point and cell data of a grid; :func:`save` writes it as VTK's XML
+``UnstructuredGrid`` with every array zlib-compressed (level :data:`ZLIB_LEVEL`) in one raw
+``AppendedData`` section, header type UInt64, no padding (the layout VTK's readers, ParaView,
+pyvista and meshio read).
+
+perga writes the file itself rather than through VTK's objects: building a
+``vtkUnstructuredGrid`` from NumPy arrays costs about 1 ms of Python a 300-granule frame, during
+which Python's GIL is held; written on a thread of its own
+(:class:`~perga.output.background.BackgroundRecorder`), that is time the simulation's thread
+waits. Here the arrays' bytes go to ``zlib.compress``, which releases the GIL, and the XML is a
+few lines of text (docs/dev/performance.md).
 """
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike
-from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
-from vtkmodules.vtkCommonCore import vtkPoints
-from vtkmodules.vtkCommonDataModel import (
-    VTK_POLY_LINE,
-    VTK_POLYGON,
-    VTK_TRIANGLE,
-    VTK_VERTEX,
-    vtkCellArray,
-    vtkDataSetAttributes,
-    vtkUnstructuredGrid,
-)
-from vtkmodules.vtkCommonMisc import vtkErrorCode
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+from numpy.typing import ArrayLike, NDArray
 
 from perga.output.files import write_new
 
-VERTEX, POLY_LINE, POLYGON, TRIANGLE = VTK_VERTEX, VTK_POLY_LINE, VTK_POLYGON, VTK_TRIANGLE
-"""The cell types perga writes."""
+VERTEX, POLY_LINE, POLYGON, TRIANGLE = 1, 4, 7, 5
+"""The VTK cell types perga writes (VTK_VERTEX, VTK_POLY_LINE, VTK_POLYGON, VTK_TRIANGLE)."""
 ZLIB_LEVEL = 1
 """zlib's fastest level: a 300-granule frame 1 % larger than at VTK's default (5), written in
 0.6 ms less (docs/dev/performance.md)."""
+TYPES = {
+    np.dtype(np.float64): "Float64",
+    np.dtype(np.float32): "Float32",
+    np.dtype(np.int64): "Int64",
+    np.dtype(np.int32): "Int32",
+    np.dtype(np.uint8): "UInt8",
+}
+"""VTK's names of the array types written; booleans are written as UInt8."""
+
+
+@dataclass(frozen=True)
+class Grid:
+    """An unstructured grid: points (n, 3), m; cells of one VTK type, cell c through the points
+    ``connectivity[offsets[c]:offsets[c + 1]]``; data arrays by name, a value or row per point
+    or cell."""
+
+    points: NDArray[np.float64]
+    cell_type: int
+    offsets: NDArray[np.int64]
+    connectivity: NDArray[np.int64]
+    point_data: dict[str, NDArray] = field(default_factory=dict)
+    cell_data: dict[str, NDArray] = field(default_factory=dict)
+
+    @property
+    def cells(self) -> int:
+        """The number of cells."""
+        return len(self.offsets) - 1
 
 
 def grid(
@@ -46,67 +67,93 @@ def grid(
     connectivity: ArrayLike,
     point_data: Mapping[str, ArrayLike] | None = None,
     cell_data: Mapping[str, ArrayLike] | None = None,
-) -> vtkUnstructuredGrid:
+) -> Grid:
     """Cells of ``cell_type``, cell c through the points ``connectivity[offsets[c]:offsets[c +
     1]]``, over ``points`` ((n, 2) lifted to z = 0, or (n, 3)), with data arrays by name (one
-    value or row per point or cell). The grid refers to the arrays without copying them
-    (``numpy_to_vtk``'s arrays hold a reference to their NumPy array)."""
+    value or row per point or cell)."""
     xyz = np.asarray(points, dtype=np.float64)
     if xyz.ndim != 2 or xyz.shape[1] not in (2, 3):
         raise ValueError(f"points must be (n, 2) or (n, 3), got shape {xyz.shape}")
     if xyz.shape[1] == 2:
         xyz = np.column_stack((xyz, np.zeros(len(xyz))))
-    out = vtkUnstructuredGrid()
-    vtk_points = vtkPoints()
-    vtk_points.SetData(numpy_to_vtk(np.ascontiguousarray(xyz), deep=False))
-    out.SetPoints(vtk_points)
-    cells = vtkCellArray()
-    cells.SetData(_ids(offsets), _ids(connectivity))
-    out.SetCells(cell_type, cells)
-    _add(out.GetPointData(), point_data or {})
-    _add(out.GetCellData(), cell_data or {})
-    return out
+    return Grid(
+        xyz,
+        cell_type,
+        np.asarray(offsets, dtype=np.int64),
+        np.asarray(connectivity, dtype=np.int64),
+        {k: _array(v) for k, v in (point_data or {}).items()},
+        {k: _array(v) for k, v in (cell_data or {}).items()},
+    )
 
 
-def vertices(
-    points: ArrayLike, point_data: Mapping[str, ArrayLike] | None = None
-) -> vtkUnstructuredGrid:
+def vertices(points: ArrayLike, point_data: Mapping[str, ArrayLike] | None = None) -> Grid:
     """Each point of ``points`` ((n, 2), m) with its own VTK_VERTEX cell, and ``point_data``."""
     xy = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     index = np.arange(len(xy) + 1, dtype=np.int64)
     return grid(xy, VERTEX, index, index[:-1], point_data)
 
 
-def save(mesh: vtkUnstructuredGrid, path: Path) -> None:
-    """Write ``mesh`` to ``path`` (.vtu): binary, zlib at ``ZLIB_LEVEL``, inline. VTK writes
-    the file into memory and perga writes it to disk whole (:func:`~perga.output.files.
-    write_new`): VTK's own file writing crashed the process (a segmentation fault, a corrupted
-    heap) when a disk filled up in the middle of a file, and was slower than writing into
-    memory (docs/dev/performance.md). A failed write leaves no file and raises OSError."""
-    writer = vtkXMLUnstructuredGridWriter()
-    writer.SetInputData(mesh)
-    writer.SetDataModeToBinary()
-    writer.SetCompressorTypeToZLib()
-    writer.SetCompressionLevel(ZLIB_LEVEL)
-    writer.WriteToOutputStringOn()
-    errors: list[str] = []
-    for source in (writer, writer.GetExecutive()):
-        source.AddObserver("ErrorEvent", lambda _obj, _event: errors.append("VTK error"))
-    if writer.Write() != 1 or errors:
-        code = writer.GetErrorCode()
-        raise OSError(f"VTK could not make {path}: {vtkErrorCode.GetStringFromErrorCode(code)}")
-    write_new(Path(path), writer.GetOutputString().encode("utf-8"))
+def save(mesh: Grid, path: Path) -> None:
+    """Write ``mesh`` to ``path`` (.vtu, module doc), whole or not at all
+    (:func:`~perga.output.files.write_new`: a failed write leaves no file and raises
+    OSError)."""
+    blocks: list[bytes] = []
+    offset = 0
+
+    def arrays(data: Mapping[str, NDArray], indent: str) -> str:
+        nonlocal offset
+        lines = []
+        for name, values in data.items():
+            block = _compressed(values)
+            components = f'NumberOfComponents="{values.shape[1]}" ' if values.ndim == 2 else ""
+            lines.append(
+                f'{indent}<DataArray type="{TYPES[values.dtype]}" Name="{name}" '
+                f'{components}format="appended" offset="{offset}"/>\n'
+            )
+            blocks.append(block)
+            offset += len(block)
+        return "".join(lines)
+
+    cells = {
+        "connectivity": mesh.connectivity,
+        "offsets": mesh.offsets[1:],
+        "types": np.full(mesh.cells, mesh.cell_type, dtype=np.uint8),
+    }
+    head = (
+        '<?xml version="1.0"?>\n'
+        '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
+        'header_type="UInt64" compressor="vtkZLibDataCompressor">\n'
+        "  <UnstructuredGrid>\n"
+        f'    <Piece NumberOfPoints="{len(mesh.points)}" NumberOfCells="{mesh.cells}">\n'
+        f"      <PointData>\n{arrays(mesh.point_data, '        ')}      </PointData>\n"
+        f"      <CellData>\n{arrays(mesh.cell_data, '        ')}      </CellData>\n"
+        f"      <Points>\n{arrays({'Points': mesh.points}, '        ')}      </Points>\n"
+        f"      <Cells>\n{arrays(cells, '        ')}      </Cells>\n"
+        "    </Piece>\n"
+        "  </UnstructuredGrid>\n"
+        '  <AppendedData encoding="raw">\n   _'
+    )
+    tail = "\n  </AppendedData>\n</VTKFile>\n"
+    write_new(Path(path), b"".join([head.encode(), *blocks, tail.encode()]))
 
 
-def _ids(values: ArrayLike) -> object:
-    return numpy_to_vtkIdTypeArray(np.ascontiguousarray(values, dtype=np.int64), deep=False)
+def _array(values: ArrayLike) -> NDArray:
+    """``values`` as a contiguous array of a type :data:`TYPES` names (booleans as UInt8)."""
+    array = np.ascontiguousarray(values)
+    if array.dtype == bool:
+        array = array.astype(np.uint8)
+    elif array.dtype not in TYPES:
+        array = array.astype(np.int64 if array.dtype.kind in "iu" else np.float64)
+    return array
 
 
-def _add(attributes: vtkDataSetAttributes, arrays: Mapping[str, ArrayLike]) -> None:
-    for name, values in arrays.items():
-        array = np.ascontiguousarray(values)
-        if array.dtype == bool:
-            array = array.astype(np.uint8)
-        vtk_array = numpy_to_vtk(array, deep=False)
-        vtk_array.SetName(name)
-        attributes.AddArray(vtk_array)
+def _compressed(values: NDArray) -> bytes:
+    """An array's appended data: VTK's compression header (UInt64: blocks, block size, size of
+    a partial last block (0: none), each block's compressed size) and the zlib block; one block
+    of the whole array, none for an empty one."""
+    raw = np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False)
+    data = raw.tobytes()
+    if not data:
+        return np.array([0, 0, 0], dtype="<u8").tobytes()
+    block = zlib.compress(data, ZLIB_LEVEL)
+    return np.array([1, len(data), 0, len(block)], dtype="<u8").tobytes() + block

@@ -24,6 +24,7 @@ from perga.case.schema import Case
 from perga.engine.simulation import Simulation
 from perga.model.compile import compile_case, load_system
 from perga.model.system import System
+from perga.output.background import BackgroundRecorder
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
 from perga.output.tables import drop_converted
@@ -59,12 +60,17 @@ class Writer:
 
 def writers(case: Case, directory: Path, system: System) -> list[Writer]:
     """The recorders ``output.record`` lists, each with its trigger: ParaView's every
-    ``output.vtk_every`` (default ``output.every``), the tables every ``output.every``."""
+    ``output.vtk_every`` (default ``output.every``) on a thread of its own
+    (:class:`~perga.output.background.BackgroundRecorder`), the tables every ``output.every``."""
     out = case.output
     recorders = make_recorders(out.record, directory, system, out.granule_table, out.tables)
     vtk_every = out.vtk_every if out.vtk_every is not None else out.every
     return [
-        Writer(recorder, PhaseLock(vtk_every if vtk else out.every), vtk)
+        Writer(
+            BackgroundRecorder(recorder) if vtk else recorder,
+            PhaseLock(vtk_every if vtk else out.every),
+            vtk,
+        )
         for recorder in recorders
         for vtk in (isinstance(recorder, VtkRecorder),)
     ]

@@ -836,7 +836,7 @@ def _motion(x, v, a_prev, x_ref, dt):
     return dmax, smax, umax
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening):
     """Advance settings.n_steps symplectic Euler steps on one thread; returns (start, nbr, hist,
     n_rebuilds, cand_start, cand_polygon, n_lists, coasted): the neighbour list after the call,
@@ -876,7 +876,7 @@ def advance(settings, granules, props, bonds, params, walls, polygons, nbrs, wor
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def advance_threaded(
     settings, granules, props, bonds, params, walls, polygons, nbrs, work, opening
 ):  # fmt: skip

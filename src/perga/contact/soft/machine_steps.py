@@ -56,7 +56,7 @@ def _ticks_compiled():
     return lambda: _cycle_counter()
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def machine_steps(
     limit, machine, meter, pose, loads, call, opening, coasting, moment_units, watch
 ):  # fmt: skip
