@@ -1,4 +1,4 @@
-"""perga soft, perga rigid and LAMMPS on the same 2-D DEM cases, in one run (issue 4).
+"""perga soft, perga rigid, LAMMPS and a minimal kernel on the same 2-D DEM cases (issue 4).
 
 Cases (granules and contact law of ``beds.py``: monodisperse discs, k_n = 1e6 N/m, k_t = 2/7
 k_n, e = 0.7 with the force clamped at zero, friction 0.5, dt = t_c/50, skin 0.4 r):
@@ -28,20 +28,24 @@ LAMMPS        Debian's ``lmp`` (29 Sep 2021), ``pair_style gran/hooke/history ..
 perga rigid   ``perga.engine`` (Pymunk impulses, e and f exact per impact, 10 iterations) at its
               own dt (RIGID_DT; tunnelling-limited, not contact-limited), one core; box walls
               and hammers are welded polygons on a rotor, the round wall a 96-gon. At 10,000
-              granules it runs fewer steps (a Pymunk step costs ~10-20 ms there).
+              granules it runs fewer steps (a Pymunk step costs ~10-20 ms there);
+minimal       ``minimal_kernel.py`` (bed and sheared cases): a bare numba Hooke-with-history
+              kernel of the same law, walls, gravity and integrator on one thread, own serial
+              Verlet list (rebuilt past skin/2): the floor of what this physics costs.
 
 Timing: every block starts every engine afresh from the same saved state (LAMMPS re-reads the
 data file; "Loop time" excludes its setup, perga's first neighbour list is built untimed
 too), engines interleaved, their order rotated per block. Reported: particle-steps per second
 (n × steps / wall s: median and range over blocks), wall seconds per simulated second, and each
-engine's speed relative to LAMMPS on one rank (median and range of the per-block ratios).
+engine's speed relative to LAMMPS on one rank (median and range of the per-block ratios), and
+perga soft (1 thread) against the minimal kernel ("perga soft / minimal": time ratio, same).
 Neighbour rebuilds: the number in the timed run and their share of it (LAMMPS: "Neigh" of its
 timing breakdown; perga: rebuilds × the time of one build on the final state).
 
 Physics cross-checks: restitution of one impact (wall and pair) in perga soft, LAMMPS and perga
-rigid; after the timed run of block 1, perga soft (1 thread) and LAMMPS (1 rank) side by side:
-kinetic energy, contacts per granule, largest overlap, the RMS distance between the two
-codes' granule positions.
+rigid; after the timed run of block 1, every engine side by side (kinetic energy, contacts per
+granule, largest overlap) and the RMS distance of perga soft's (1 thread) granule positions to
+LAMMPS's (1 rank) and to the minimal kernel's.
 
     python benchmarks/dem_peers.py --quick        # ~1.5 min, 2 idle cores (fewer steps, blocks)
     python benchmarks/dem_peers.py                # 12.5 min at load 1-6 (docs/dev/performance.md)
@@ -68,6 +72,7 @@ from pathlib import Path
 import beds
 import engine_vs_pymunk as mill
 import lammps_run
+import minimal_kernel as minimal
 import numba
 import numpy as np
 import pymunk
@@ -96,6 +101,8 @@ HAMMER_PITCH = 1e-3  # m between them (bumps 0.04 mm deep)
 MILL_CASE = Path(__file__).with_name("cases") / "mill-soft.toml"
 
 L1 = "LAMMPS, 1 rank"
+S1 = "perga soft, 1 thread"
+MINIMAL = "minimal kernel"
 
 
 @dataclass
@@ -104,7 +111,8 @@ class Result:
     steps: int
     rebuilds: int  # neighbour-list builds during them
     neigh_share: float | None  # their share of the wall time
-    state: dict[str, np.ndarray]  # x (n, 2), v (n, 2), w (n,) after the timed steps
+    state: dict[str, np.ndarray]  # x (n, 2), v (n, 2), w (n,) after the timed steps (minimal:
+    # and touching, its pair count)
 
 
 @dataclass
@@ -203,6 +211,32 @@ def lammps_contact(mass: float) -> dict[str, object]:
         "etaw": f"{beds.wall_damping(mass):.17g}",
         "mu": beds.FRICTION,
     }
+
+
+# --- the minimal kernel ------------------------------------------------------------------------
+
+
+def minimal_engine(x: np.ndarray, width: float, v: np.ndarray | None, steps: int) -> Engine:
+    """``minimal_kernel.py`` on the bed at x (m) in a box of this width (m), velocities v (m/s);
+    its first list built untimed, as perga's."""
+    probe = minimal.MinimalBed.of(x, width, v)
+    probe.step(2)  # compiles or loads the kernel, untimed
+
+    def run() -> Result:
+        bed = minimal.MinimalBed.of(x, width, v)
+        t0 = time.perf_counter()
+        bed.step(steps)
+        seconds = time.perf_counter() - t0
+        times = []
+        for _ in range(3):
+            t1 = time.perf_counter()
+            bed.build()
+            times.append(time.perf_counter() - t1)
+        share = bed.rebuilds * statistics.median(times) / seconds
+        state = {"x": bed.x, "v": bed.v, "w": bed.w, "touching": np.asarray(bed.touching())}
+        return Result(seconds, steps, bed.rebuilds, share, state)
+
+    return Engine(MINIMAL, x.shape[0], probe.dt, run)
 
 
 # --- perga rigid ---------------------------------------------------------------------------------
@@ -322,6 +356,8 @@ def _bed_engines(name: str, n: int, args, lmp: str | None, workdir: Path, log, v
         engines += [lammps_engine(lmp, "bed.in", workdir, variables, k, n, m) for k in args.ranks]
     if args.rigid:
         engines.append(rigid_engine(rigid_box_spec(bed, v), 0, args.rigid_steps(n)))
+    if args.minimal:
+        engines.append(minimal_engine(bed.x, bed.width, v, steps))
 
     def check(engines: list[Engine]) -> list[str]:
         return compare(engines, n, r, m, bed.x, box_overlaps(bed.width))
@@ -523,7 +559,8 @@ def contact_figures(x: np.ndarray, r: float, walls) -> tuple[float, float]:
 
 
 def compare(engines, n, r, m, x0, walls) -> list[str]:
-    """Soft (1 thread) and LAMMPS (1 rank) after the timed run of the first block."""
+    """Every engine after the timed run of the first block; perga soft (1 thread) against LAMMPS
+    (1 rank) and the minimal kernel."""
     inertia = 0.5 * m * r * r
     lines = []
     states = {e.name: e.results[0].state for e in engines if e.results}
@@ -534,15 +571,17 @@ def compare(engines, n, r, m, x0, walls) -> list[str]:
         if x0 is not None:
             moved = np.linalg.norm(s["x"] - x0, axis=1)
             text += f", mean displacement {moved.mean() / r:.2e} r"
+        if "touching" in s:
+            text += f" ({int(s['touching']) / n:.3f} touching pairs/granule, its own count)"
         lines.append(text)
-    soft = states.get("perga soft, 1 thread")
-    lam = states.get(L1)
-    if soft is not None and lam is not None:
-        d = np.linalg.norm(soft["x"] - lam["x"], axis=1)
-        lines.append(
-            f"perga soft vs LAMMPS: granule positions differ by {np.sqrt(np.mean(d**2)) / r:.2e} r "
-            f"RMS, {d.max() / r:.2e} r at most"
-        )
+    soft = states.get(S1)
+    for name, other in ((L1, "LAMMPS"), (MINIMAL, "minimal")):
+        if soft is not None and name in states:
+            d = np.linalg.norm(soft["x"] - states[name]["x"], axis=1)
+            lines.append(
+                f"perga soft vs {other}: granule positions differ by "
+                f"{np.sqrt(np.mean(d**2)) / r:.2e} r RMS, {d.max() / r:.2e} r at most"
+            )
     return lines
 
 
@@ -666,6 +705,9 @@ def report(case: Case, log) -> list[str]:
     if "perga soft, 2 threads" in two and "LAMMPS, 2 ranks" in two:
         med, lo, hi = paired(two["perga soft, 2 threads"], two["LAMMPS, 2 ranks"])
         log(f"  perga soft 2 threads / LAMMPS 2 ranks: {med:.2f} ({lo:.2f}-{hi:.2f})")
+    if S1 in two and MINIMAL in two:
+        med, lo, hi = paired(two[MINIMAL], two[S1])
+        log(f"  perga soft / minimal (1 thread, time ratio): {med:.2f} ({lo:.2f}-{hi:.2f})")
     for line in case.check(case.engines):
         log(f"  {line}")
     return rows
@@ -686,6 +728,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-mpi", action="store_true", help="LAMMPS on one rank only")
     p.add_argument("--no-lammps", action="store_true")
     p.add_argument("--no-rigid", action="store_true")
+    p.add_argument("--no-minimal", action="store_true", help="no minimal kernel line (beds)")
     args = p.parse_args(argv)
     quick = args.quick
     blocks = args.blocks or (3 if quick else 5)
@@ -696,6 +739,7 @@ def main(argv: list[str] | None = None) -> int:
     args.mill_steps = lambda: (1000, 2000) if quick else (5000, 10000)
     args.impact_refinements = (1,) if quick else (1, 10)
     args.rigid = not args.no_rigid
+    args.minimal = not args.no_minimal
 
     def log(text: str = "") -> None:
         print(text, flush=True)
