@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import json
 import re
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
+import pyvista as pv
 
 import perga
 
@@ -54,13 +54,12 @@ def table_columns(run: Path) -> dict[str, list[str]]:
 
 
 def vtk_arrays(run: Path) -> set[str]:
-    """The names of the point and cell arrays of every .vtu file in ``run``/vtk."""
+    """The names of the point and cell arrays of every .vtu file in ``run``/vtk, as VTK reads
+    them (pyvista)."""
     names: set[str] = set()
     for path in (run / "vtk").glob("*.vtu"):
-        root = ET.parse(path).getroot()
-        for data in root.iter():
-            if data.tag in ("PointData", "CellData"):
-                names.update(a.get("Name") for a in data.iter("DataArray"))
+        mesh = pv.read(path)
+        names.update(mesh.point_data.keys(), mesh.cell_data.keys())
     return names
 
 
