@@ -66,7 +66,7 @@ def digest(folder: Path) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--case", type=Path, default=ROOT / "cases" / "soft-separator.toml")
-    parser.add_argument("--seconds", type=float, default=0.2, help="simulated time, s")
+    parser.add_argument("--seconds", type=float, default=0.5, help="simulated time, s")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--against", help="a commit to run side by side")
     parser.add_argument("--pairs", type=Path, help=argparse.SUPPRESS)

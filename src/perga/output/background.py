@@ -1,6 +1,6 @@
 """A recorder run on a thread of its own, so that the simulation steps on while a frame is
 written: the ParaView writer (:class:`~perga.output.vtk.VtkRecorder`), whose work is mostly
-VTK's compression and file writing, which run without Python's GIL (as do the compiled soft
+zlib's compression and file writing, which run without Python's GIL (as do the compiled soft
 steps, ``nogil``), so the two overlap on two cores.
 
 The frames handed over are the simulation's own copies (:meth:`~perga.engine.simulation.
