@@ -46,7 +46,7 @@ from numba import njit
 from perga.case import load_case
 from perga.contact.soft import SoftGranules
 from perga.contact.soft import kernel as k
-from perga.contact.soft.laws import P_DAMPT, P_MU, P_MUR
+from perga.contact.soft.laws import LINEAR, P_DAMPT, P_HERTZ, P_MU, P_MUR
 from perga.contact.soft.neighbours import build
 from perga.contact.soft.polygon_forces import Candidates, polygon_contact
 from perga.contact.soft.polygon_set import PolygonArrays, TableArrays
@@ -73,7 +73,9 @@ def chamber() -> SoftGranules:
 
 def separator() -> SoftGranules:
     """``benchmarks/cases/soft-separator-1000.toml`` at t = 5 ms."""
-    case = load_case(ROOT / "benchmarks/cases/soft-separator-1000.toml", ["solver.threads=1"])
+    case = load_case(
+        ROOT / "benchmarks/cases/soft-separator-1000.toml", overrides=["solver.threads=1"]
+    )
     sim = Simulation(compile_case(case), record_impacts=False, track_energy=False)
     while sim.time < 0.005:
         sim.step()
@@ -97,13 +99,13 @@ STATES: dict[str, Callable[[], SoftGranules]] = {
 
 @njit(parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pairs(reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs, dt, reach, tangential,
-           rolling, acc, lost, flags):  # fmt: skip
+           rolling, linear, acc, lost, flags):  # fmt: skip
     """The pair pass, reps times."""
     start, nbr, hist = nbrs
     for _ in range(reps):
         k._pair_forces_serial(
             x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-            rolling, acc, lost, flags,
+            rolling, linear, acc, lost, flags,
         )  # fmt: skip
 
 
@@ -169,10 +171,11 @@ def runner(g: SoftGranules, part: str) -> tuple[Callable[[int], object], int, in
         lost = np.zeros(work[0].shape[0])
         tangential = bool(np.any(params[..., P_MU] != 0.0) or np.any(params[..., P_DAMPT] != 0.0))
         rolling = bool(np.any(params[..., P_MUR] != 0.0))
+        linear = bool(np.all(params[..., P_HERTZ] == LINEAR))
         return (
             lambda reps: _pairs(
                 reps, x, v, w, a_prev, r, m, inertia, mat, params, nbrs[:3], dt, reach,
-                tangential, rolling, work[0], lost, np.zeros(n, np.int8),
+                tangential, rolling, linear, work[0], lost, np.zeros(n, np.int8),
             ),
             steps, n, "ns a granule a step",
         )  # fmt: skip

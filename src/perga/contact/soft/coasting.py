@@ -91,7 +91,7 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
     for c in range(count):
         i = index[c]
         flags[i] = COAST
-        fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
+        fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0, acc.shape[0] == 1)
         f[i, 0] = fx
         f[i, 1] = fy
         tq[i] = t

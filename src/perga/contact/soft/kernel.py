@@ -119,6 +119,7 @@ from numba.core.errors import NumbaPerformanceWarning
 
 from perga.contact.soft.coasting import COAST, coast, rewind, speed_bound
 from perga.contact.soft.laws import (
+    LINEAR,
     P_CLAMP,
     P_DAMP,
     P_DAMPT,
@@ -127,6 +128,7 @@ from perga.contact.soft.laws import (
     P_MUR,
     contact_law,
     contact_stiffness,
+    form,
     normal_force,
     released,
     rolling_torque,
@@ -302,7 +304,7 @@ class Opening(NamedTuple):
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def pair_force(
     i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt, tangential,
-    rolling,
+    rolling, linear,
 ):  # fmt: skip
     """Force (fx, fy) on i (−it on j), torques on i and j, dissipated energy (J), for list entry
     k; updates hist[k].
@@ -315,13 +317,17 @@ def pair_force(
     or tangential damping; if not, the tangential law is skipped (its force is zero and its
     spring stays empty). rolling: whether any pair of the table has rolling resistance; if so,
     it is computed for a pair with μ_r > 0 (a flag for the whole table lets the compiler drop the
-    per-pair test where nothing rolls, docs/dev/performance.md)."""
+    per-pair test where nothing rolls, docs/dev/performance.md). linear: the table holds linear
+    rows only (``laws.form``)."""
     h = 0.5 * dt
+    a = mat[i]
+    b = mat[j]
+    hertz = form(params, a, b, linear)
     if d2 > far * far:
         xi = hist[k]
         hist[k] = 0.0
         gap = rs - math.sqrt(d2)
-        return 0.0, 0.0, 0.0, 0.0, released(params, mat[i], mat[j], r[i] * r[j] / rs, gap, xi)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r[i] * r[j] / rs, gap, xi, hertz)
     if d2 > 0.0:
         d = math.sqrt(d2)
         nx = dx / d
@@ -334,14 +340,12 @@ def pair_force(
     vry = v[i, 1] - v[j, 1] + h * (a_prev[i, 1] - a_prev[j, 1])
     ddelta = -(vrx * nx + vry * ny)
     delta = rs - d
-    a = mat[i]
-    b = mat[j]
     if not touching(delta, ddelta, dt):
         xi = hist[k]
         if xi == 0.0:
             return 0.0, 0.0, 0.0, 0.0, 0.0
         hist[k] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r[i] * r[j] / rs, delta, xi)
+        return 0.0, 0.0, 0.0, 0.0, released(params, a, b, r[i] * r[j] / rs, delta, xi, hertz)
     r_eff = r[i] * r[j] / rs
     m_eff = m[i] * m[j] / (m[i] + m[j])
     wi = w[i] + h * a_prev[i, 2]
@@ -356,7 +360,7 @@ def pair_force(
         arm_j = r[j] - half
         vt = vrx * tx + vry * ty - (arm_i * wi + arm_j * wj)
         fn, ft, hist[k], lost = contact_law(
-            params, a, b, r_eff, delta, ddelta, vt, m_eff, hist[k], dt
+            params, a, b, hertz, r_eff, delta, ddelta, vt, m_eff, hist[k], dt
         )
         fx = fn * nx + ft * tx
         fy = fn * ny + ft * ty
@@ -364,13 +368,13 @@ def pair_force(
         tj = -arm_j * ft
     else:
         fn, lost = normal_force(
-            contact_stiffness(params, a, b, r_eff), params[a, b, P_DAMP], params[a, b, P_HERTZ],
+            contact_stiffness(params, a, b, r_eff, hertz), params[a, b, P_DAMP], hertz,
             params[a, b, P_CLAMP], delta, ddelta, m_eff, dt,
         )  # fmt: skip
         xi = hist[k]
         if xi != 0.0:
             hist[k] = 0.0
-            lost += released(params, a, b, r_eff, delta, xi)
+            lost += released(params, a, b, r_eff, delta, xi, hertz)
         fx = fn * nx
         fy = fn * ny
         ti = 0.0
@@ -388,7 +392,7 @@ def pair_force(
 @njit(cache=True, inline="always", fastmath=FASTMATH)
 def _pair_range(
     lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, out, flags,
+    rolling, linear, out, flags,
 ):  # fmt: skip
     """Pair forces of the list rows lo:hi (granules i) added into out (n, 3) = (fx, fy, torque),
     which holds zeros (the per-granule pass zeroes each row it reads); returns the energy those
@@ -419,7 +423,7 @@ def _pair_range(
                 continue  # no force and no spring to release (``pair_force``): nothing to add
             fx, fy, ti, tj, de = pair_force(
                 i, j, k, dx, dy, d2, rs, far, v, w, a_prev, r, m, inertia, mat, params, hist, dt,
-                tangential, rolling,
+                tangential, rolling, linear,
             )  # fmt: skip
             out[i, 0] += fx
             out[i, 1] += fy
@@ -434,37 +438,52 @@ def _pair_range(
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_forces(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, acc, lost, flags,
+    rolling, linear, acc, lost, flags,
 ):  # fmt: skip
     """Pair forces of the list (start, nbr, hist) added into acc (n_chunks, n, 3) = (fx, fy,
     torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
-    (docs/dev/performance.md); reach (m), tangential and rolling: as in ``pair_force``; flags (n,)
-    int8: the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
+    (docs/dev/performance.md); reach (m), tangential, rolling and linear: as in ``pair_force``
+    (the loop is compiled twice, with linear the constant True and False); flags (n,) int8:
+    the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
     chunk runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in prange(n_chunks):
-        lost[c] = _pair_range(
-            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c], flags,
-        )  # fmt: skip
+        lo, hi = c * n // n_chunks, (c + 1) * n // n_chunks
+        if linear:  # a constant in each copy of the inlined loop (``pair_force``)
+            lost[c] = _pair_range(
+                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+                tangential, rolling, True, acc[c], flags,
+            )  # fmt: skip
+        else:
+            lost[c] = _pair_range(
+                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+                tangential, rolling, False, acc[c], flags,
+            )  # fmt: skip
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def _pair_forces_serial(
     x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, tangential,
-    rolling, acc, lost, flags,
+    rolling, linear, acc, lost, flags,
 ):  # fmt: skip
     """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
     for c in range(n_chunks):
-        lost[c] = _pair_range(
-            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
-            params, start, nbr, hist, dt, reach, tangential, rolling, acc[c], flags,
-        )  # fmt: skip
+        lo, hi = c * n // n_chunks, (c + 1) * n // n_chunks
+        if linear:
+            lost[c] = _pair_range(
+                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+                tangential, rolling, True, acc[c], flags,
+            )  # fmt: skip
+        else:
+            lost[c] = _pair_range(
+                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+                tangential, rolling, False, acc[c], flags,
+            )  # fmt: skip
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -492,7 +511,8 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
             if inside > 0.0 and d2 < inside * inside:
                 xi = wall_hist[i, s]
                 if xi != 0.0:
-                    lost += released(params, a, b, r[i], r[i] + math.sqrt(d2) - rows[s, 3], xi)
+                    gap = r[i] + math.sqrt(d2) - rows[s, 3]
+                    lost += released(params, a, b, r[i], gap, xi, params[a, b, P_HERTZ])
                     wall_hist[i, s] = 0.0
                 continue
             d = math.sqrt(d2)
@@ -511,14 +531,14 @@ def wall_force(i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, 
         if not touching(delta, ddelta, dt):
             xi = wall_hist[i, s]
             if xi != 0.0:
-                lost += released(params, a, b, r[i], delta, xi)
+                lost += released(params, a, b, r[i], delta, xi, params[a, b, P_HERTZ])
                 wall_hist[i, s] = 0.0
             continue
         tx = -ny
         ty = nx
         vt = ux * tx + uy * ty - r[i] * wi
         fn, ft, wall_hist[i, s], de = contact_law(
-            params, a, b, r[i], delta, ddelta, vt, m[i], wall_hist[i, s], dt
+            params, a, b, params[a, b, P_HERTZ], r[i], delta, ddelta, vt, m[i], wall_hist[i, s], dt
         )
         fx += fn * nx + ft * tx
         fy += fn * ny + ft * ty
@@ -577,10 +597,12 @@ def mark_special(wall_gap, covered, cstart, held, flags, order):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def _free_step(i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep):
+def _free_step(
+    i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep, single
+):  # fmt: skip
     """Granule i's step on the free path (``_integrate_free``); returns its |x − x_ref|²,
     |v|², |v + ½ dt a_prev|²."""
-    fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0)
+    fx, fy, t = add_pair_forces(acc, i, 0.0, 0.0, 0.0, single)
     if keep:
         f[i, 0] = fx
         f[i, 1] = fy
@@ -602,7 +624,35 @@ def _integrate_free(
     of testing every granule's flag, a branch the coasting granules would make unpredictable.
     A function of its own, not inlined: the small loop compiles tighter than inside the full
     path's function (docs/dev/performance.md). Compiled as the passes are (parallel=True,
-    error_model="numpy": the same arithmetic)."""
+    error_model="numpy": the same arithmetic).
+
+    A step without drag (damp = 1) or speed cap (v_cap = ∞), as every step but ``relax``'s,
+    runs a copy of the loop compiled with those constants, and one chunk's a copy that reads
+    that chunk alone (``stepping.add_pair_forces``): the unused terms then cost nothing (the
+    cap's square root and division were computed and discarded on every granule,
+    docs/dev/performance.md); the floats are the same."""
+    if damp != 1.0 or v_cap != math.inf:
+        return _free_loop(
+            lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
+            gravity, keep, False,
+        )  # fmt: skip
+    if acc.shape[0] == 1:
+        return _free_loop(
+            lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, 1.0,
+            math.inf, gravity, keep, True,
+        )  # fmt: skip
+    return _free_loop(
+        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, 1.0, math.inf,
+        gravity, keep, False,
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _free_loop(
+    lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
+    gravity, keep, single,
+):  # fmt: skip
+    """The loop of ``_integrate_free``; single: acc holds one chunk (``add_pair_forces``)."""
     dmax = 0.0
     smax = 0.0
     umax = 0.0
@@ -611,8 +661,9 @@ def _integrate_free(
             if flags[i]:
                 continue
             d2, s2, u2 = _free_step(
-                i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep
-            )
+                i, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity, keep,
+                single,
+            )  # fmt: skip
             dmax = max(dmax, d2)
             smax = max(smax, s2)
             umax = max(umax, u2)
@@ -620,7 +671,7 @@ def _integrate_free(
     for a in range(np.searchsorted(free, lo), np.searchsorted(free, hi)):
         d2, s2, u2 = _free_step(
             free[a], x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, dt, damp, v_cap, gravity,
-            keep,
+            keep, single,
         )  # fmt: skip
         dmax = max(dmax, d2)
         smax = max(smax, s2)
@@ -680,7 +731,7 @@ def _integrate_range(
                 i, x, v, w, a_prev, r, m, inertia, mat, params, rows, wall_hist, dt, reach
             )
             lost += de
-        fx, fy, t = add_pair_forces(acc, i, fx, fy, t)
+        fx, fy, t = add_pair_forces(acc, i, fx, fy, t, acc.shape[0] == 1)
         for e in range(cstart[i], cstart[i + 1]):
             was = phist[i, cpoly[e], HIST_ACTIVE] != 0.0
             now, px, py, ti, tk, de = polygon_contact(
@@ -942,6 +993,7 @@ def _advance(
     dmax, smax, umax = _motion(x, v, granules.a_prev, x_ref, dt)
     tangential = np.any(params[:, :, P_MU] != 0.0) or np.any(params[:, :, P_DAMPT] != 0.0)
     rolling = np.any(params[:, :, P_MUR] != 0.0)
+    linear = np.all(params[:, :, P_HERTZ] == LINEAR)
     wall_gap = np.empty(n)
     near = 0.0
     flags = np.empty(n, np.int8)
@@ -1015,7 +1067,7 @@ def _advance(
         if pairs:
             pair_pass(
                 x, v, granules.w, granules.a_prev, r, props.m, props.inertia, props.mat, params,
-                start, nbr, hist, dt, reach, tangential, rolling, work.acc, lost, flags,
+                start, nbr, hist, dt, reach, tangential, rolling, linear, work.acc, lost, flags,
             )  # fmt: skip
         integrate_pass(
             granules, props, bonds, params, walls, poly, polygons.table, phist, rho, cand,

@@ -28,6 +28,7 @@ from numba import njit
 from perga.analytic.contact import End, HertzTsuji, LinearSpringDashpot
 from perga.contact.laws import contact_law as named_law
 from perga.contact.laws.row import (
+    LINEAR,
     N_PARAMS,
     P_CLAMP,
     P_DAMP,
@@ -150,43 +151,51 @@ def spring_energy(kt, hertz, h):
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def contact_stiffness(params, a, b, r_eff):
-    """Normal stiffness of a contact of materials a, b and effective radius r_eff (m): P_KN, N/m
-    (linear), or P_KN·√r_eff, N/m^{3/2} (Hertz)."""
+def form(params, a, b, linear):
+    """The normal-force form (P_HERTZ) of row a, b; LINEAR without reading it where ``linear``
+    (the caller knows the table holds linear rows only): with ``linear`` a constant of the
+    compiled code, the compiler drops every Hertz branch of the law (docs/dev/performance.md)."""
+    return float(LINEAR) if linear else params[a, b, P_HERTZ]
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def contact_stiffness(params, a, b, r_eff, hertz):
+    """Normal stiffness of a contact of materials a, b and effective radius r_eff (m) whose row
+    has the form hertz (``form``): P_KN, N/m (linear), or P_KN·√r_eff, N/m^{3/2} (Hertz)."""
     kn = params[a, b, P_KN]
-    if params[a, b, P_HERTZ] != 0.0:
+    if hertz != 0.0:
         kn *= math.sqrt(r_eff)
     return kn
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def tangential_stiffness(params, a, b, r_eff, delta):
+def tangential_stiffness(params, a, b, r_eff, delta, hertz):
     """Tangential stiffness k_t (N/m) of materials a, b at effective radius r_eff and overlap
-    delta (m): P_KT, or P_KT·√(r_eff·δ⁺) (Hertz)."""
+    delta (m) for the row's form hertz (``form``): P_KT, or P_KT·√(r_eff·δ⁺) (Hertz)."""
     kt = params[a, b, P_KT]
-    if params[a, b, P_HERTZ] != 0.0:
+    if hertz != 0.0:
         kt *= math.sqrt(r_eff * max(delta, 0.0))
     return kt
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def released(params, a, b, r_eff, delta, h):
+def released(params, a, b, r_eff, delta, h, hertz):
     """Energy of a tangential spring of history h (``tangential_force``) dropped when its
-    contact ends at overlap delta, J.
+    contact ends at overlap delta, J; hertz: the row's form (``form``).
 
     A contact ends (the history is reset) with h ≠ 0 only when the law left it so at its last
     step (tangential damping at F_n = 0, or an attractive F_n with end="overlap", or a Hertz
     spring still holding energy as its k_t went to 0); that energy then counts as dissipated.
     """
-    kt = tangential_stiffness(params, a, b, r_eff, delta)
-    return spring_energy(kt, params[a, b, P_HERTZ], h)
+    return spring_energy(tangential_stiffness(params, a, b, r_eff, delta, hertz), hertz, h)
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def contact_law(params, a, b, r_eff, delta, ddelta, vt, m_eff, xi, dt):
+def contact_law(params, a, b, hertz, r_eff, delta, ddelta, vt, m_eff, xi, dt):
     """Normal and tangential force of one contact between materials a, b over one step.
 
-    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; r_eff:
+    Call when ``touching(delta, ddelta, dt)``. params: (n_mat, n_mat, N_PARAMS) table; hertz:
+    the row's normal-force form (``form``); r_eff:
     the contact's effective radius R*, m (Hertz stiffness, ``contact_stiffness``); delta:
     overlap at the step's time (may be ≤ 0 just before first touch), m; ddelta: approach rate
     dδ/dt at that time, m/s; vt: tangential slip rate of A's contact point relative to B's
@@ -199,11 +208,11 @@ def contact_law(params, a, b, r_eff, delta, ddelta, vt, m_eff, xi, dt):
     dissipation are documented there); Hertz rows get the Mindlin-like k_t = P_KT·√(R*δ).
     """
     return contact_force(
-        contact_stiffness(params, a, b, r_eff),
+        contact_stiffness(params, a, b, r_eff, hertz),
         params[a, b, P_DAMP],
-        params[a, b, P_HERTZ],
+        hertz,
         params[a, b, P_CLAMP],
-        tangential_stiffness(params, a, b, r_eff, delta),
+        tangential_stiffness(params, a, b, r_eff, delta, hertz),
         params[a, b, P_DAMPT],
         params[a, b, P_MU],
         delta,

@@ -16,12 +16,12 @@ from perga.geometry.disc_polygon import FASTMATH
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def add_pair_forces(acc, i, fx, fy, t):
+def add_pair_forces(acc, i, fx, fy, t, single):
     """(fx, fy, t) plus granule i's pair force and torque from each chunk of acc (n_chunks, n,
-    3), in chunk order; zeroes those rows for the next pair pass. One chunk (one thread) is
-    added without the loop over chunks: the per-granule loop then compiles tighter
-    (docs/dev/performance.md)."""
-    if acc.shape[0] == 1:
+    3), in chunk order; zeroes those rows for the next pair pass. single (acc holds one chunk:
+    one thread) adds it without the loop over chunks; given as a constant, the per-granule loop
+    compiles tighter (docs/dev/performance.md)."""
+    if single:
         fx += acc[0, i, 0]
         fy += acc[0, i, 1]
         t += acc[0, i, 2]
