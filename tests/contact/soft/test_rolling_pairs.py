@@ -13,10 +13,10 @@ OVERLAP = 1e-6
 K_N = 1e6
 
 
-def _torques(mu_r: float) -> np.ndarray:
-    """One step of two frictionless discs overlapping by OVERLAP at rest, spinning at +30 and
-    −10 rad/s: the contact torques on them, N·m."""
-    row = contact_parameters("linear", 0.5, k_n=K_N, friction=0.0, rolling=mu_r)
+def _torques(mu_r: float, friction: float = 0.0) -> np.ndarray:
+    """One step of two discs (frictionless unless said) overlapping by OVERLAP at rest,
+    spinning at +30 and −10 rad/s: the contact torques on them, N·m."""
+    row = contact_parameters("linear", 0.5, k_n=K_N, friction=friction, rolling=mu_r)
     g = SoftGranules(
         [[0.0, 0.0], [2 * R - OVERLAP, 0.0]], [R, R], [MASS, MASS], uniform_table(row),
         w=[30.0, -10.0],
@@ -36,3 +36,14 @@ def test_a_pair_resists_its_relative_rolling(mu_r: float) -> None:
     assert tq[0] == pytest.approx(-resistance, rel=1e-12)
     assert tq[1] == -tq[0]
     assert np.all(_torques(0.0) == 0.0)
+
+
+@pytest.mark.parametrize("mu_r", [0.0, 0.2])
+def test_friction_leaves_the_rolling_resistance_as_it_is(mu_r: float) -> None:
+    """With friction (the kernel's commonest table, compiled for one chunk on its own) the
+    tangential force turns both discs alike (−arm F_t each, equal arms), so the rolling torque
+    is half the torques' difference: ∓μ_r R* F_n as without friction, to 1e-12 relative (the
+    same products in another order), and zero without μ_r."""
+    tq = _torques(mu_r, friction=0.5)
+    assert tq[0] + tq[1] != 0.0  # the tangential force does act
+    assert 0.5 * (tq[0] - tq[1]) == pytest.approx(-mu_r * (R / 2) * K_N * OVERLAP, rel=1e-12)

@@ -444,24 +444,24 @@ def pair_forces(
     torque), which holds zeros, one slice per chunk of i, in parallel; the energy the chunk's
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
-    (docs/dev/performance.md); reach (m), tangential, rolling and linear: as in ``pair_force``
-    (the loop is compiled twice, with linear the constant True and False); flags (n,) int8:
+    (docs/dev/performance.md); reach (m), tangential, rolling and linear: as in ``pair_force``;
+    one chunk of the common table runs ``_pair_rows``, a copy of the loop compiled for it, in
+    this function and in ``_pair_forces_serial`` alike (the same floats on one thread or two),
+    every other call the loop with the flags read at run time; flags (n,) int8:
     the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
     chunk runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
+    if n_chunks == 1 and linear and tangential and not rolling:
+        lost[0] = _pair_rows(
+            x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, flags
+        )
+        return
     for c in prange(n_chunks):
-        lo, hi = c * n // n_chunks, (c + 1) * n // n_chunks
-        if linear:  # a constant in each copy of the inlined loop (``pair_force``)
-            lost[c] = _pair_range(
-                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
-                tangential, rolling, True, acc[c], flags,
-            )  # fmt: skip
-        else:
-            lost[c] = _pair_range(
-                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
-                tangential, rolling, False, acc[c], flags,
-            )  # fmt: skip
+        lost[c] = _pair_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, start, nbr, hist, dt, reach, tangential, rolling, False, acc[c], flags,
+        )  # fmt: skip
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
@@ -472,18 +472,30 @@ def _pair_forces_serial(
     """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
+    if n_chunks == 1 and linear and tangential and not rolling:
+        lost[0] = _pair_rows(
+            x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, flags
+        )
+        return
     for c in range(n_chunks):
-        lo, hi = c * n // n_chunks, (c + 1) * n // n_chunks
-        if linear:
-            lost[c] = _pair_range(
-                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
-                tangential, rolling, True, acc[c], flags,
-            )  # fmt: skip
-        else:
-            lost[c] = _pair_range(
-                lo, hi, x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
-                tangential, rolling, False, acc[c], flags,
-            )  # fmt: skip
+        lost[c] = _pair_range(
+            c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
+            params, start, nbr, hist, dt, reach, tangential, rolling, False, acc[c], flags,
+        )  # fmt: skip
+
+
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def _pair_rows(
+    x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, flags
+):
+    """The pair forces of the common table (linear rows with friction, no rolling resistance)
+    in one chunk (acc (1, n, 3)): ``_pair_range`` over the rows 0:n with its flags constants,
+    so that the other laws' branches are not in the compiled loop, nor bounds computed from a
+    chunk (both slower, docs/dev/performance.md)."""
+    return _pair_range(
+        0, x.shape[0], x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach,
+        True, False, True, acc[0], flags,
+    )  # fmt: skip
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
@@ -626,23 +638,19 @@ def _integrate_free(
     path's function (docs/dev/performance.md). Compiled as the passes are (parallel=True,
     error_model="numpy": the same arithmetic).
 
-    A step without drag (damp = 1) or speed cap (v_cap = ∞), as every step but ``relax``'s,
-    runs a copy of the loop compiled with those constants, and one chunk's a copy that reads
-    that chunk alone (``stepping.add_pair_forces``): the unused terms then cost nothing (the
-    cap's square root and division were computed and discarded on every granule,
-    docs/dev/performance.md); the floats are the same."""
-    if damp != 1.0 or v_cap != math.inf:
-        return _free_loop(
-            lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
-            gravity, keep, False,
-        )  # fmt: skip
-    if acc.shape[0] == 1:
+    One chunk of a step without drag (damp = 1) or speed cap (v_cap = ∞), as every step but
+    ``relax``'s, runs a copy of the loop compiled with those constants, reading that chunk
+    alone (``stepping.add_pair_forces``): the unused terms then cost nothing (the cap's square
+    root and division were computed and discarded for every granule,
+    docs/dev/performance.md). The compiler may round the same arithmetic differently in the
+    two copies (a last bit, docs/dev/performance.md)."""
+    if acc.shape[0] == 1 and damp == 1.0 and v_cap == math.inf:
         return _free_loop(
             lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, 1.0,
             math.inf, gravity, keep, True,
         )  # fmt: skip
     return _free_loop(
-        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, 1.0, math.inf,
+        lo, hi, x, v, w, a_prev, m, inertia, acc, f, tq, x_ref, flags, free, dt, damp, v_cap,
         gravity, keep, False,
     )  # fmt: skip
 
