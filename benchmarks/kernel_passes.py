@@ -6,7 +6,7 @@ States (one thread):
 
 * ``chamber``: the hammer chamber of ``dem_peers.py`` (3,000 granules, six welded plate
   hammers), after 100 machine steps;
-* ``separator``: ``benchmarks/cases/soft-separator-1000.toml`` at t = 5 ms;
+* ``separator``: ``benchmarks/cases/soft-separator-1000.toml`` at t = 5 ms (``--at``);
 * ``bed``: the settled 10,000-granule bed of ``beds.py``, after 20 steps.
 
 Passes, ns a granule a step unless said:
@@ -25,6 +25,7 @@ of parts, and ``soft_kernel.py`` checks results.
 
     python benchmarks/kernel_passes.py                     # the three states, ~1 min
     python benchmarks/kernel_passes.py --states chamber --blocks 7
+    python benchmarks/kernel_passes.py --states separator --at 0.04   # later in the run
 """
 
 from __future__ import annotations
@@ -71,13 +72,13 @@ def chamber() -> SoftGranules:
     return sim.contacts.granules
 
 
-def separator() -> SoftGranules:
-    """``benchmarks/cases/soft-separator-1000.toml`` at t = 5 ms."""
+def separator(at: float = 0.005) -> SoftGranules:
+    """``benchmarks/cases/soft-separator-1000.toml`` at t = at, s (5 ms unless given)."""
     case = load_case(
         ROOT / "benchmarks/cases/soft-separator-1000.toml", overrides=["solver.threads=1"]
     )
     sim = Simulation(compile_case(case), record_impacts=False, track_energy=False)
-    while sim.time < 0.005:
+    while sim.time < at:
         sim.step()
     return sim.contacts.granules
 
@@ -233,10 +234,11 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--states", nargs="+", choices=list(STATES), default=list(STATES))
     p.add_argument("--blocks", type=int, default=5)
+    p.add_argument("--at", type=float, default=0.005, help="the separator state's time, s")
     args = p.parse_args(argv)
     print(f"load {os.getloadavg()[0]:.2f}; {args.blocks} blocks; one thread")
     for name in args.states:
-        g = STATES[name]()
+        g = separator(args.at) if name == "separator" else STATES[name]()
         entries = g.nbr.size / g.n
         print(f"\n{name}: {g.n} granules, {entries:.2f} list entries a granule")
         for part, median, low, high, unit in timings(g, args.blocks):

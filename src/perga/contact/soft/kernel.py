@@ -445,14 +445,15 @@ def pair_forces(
     contacts dissipated into lost[c], J. Arrays as in ``Granules``, ``GranuleProps`` and
     ``NeighbourList``: this loop is the kernel's hottest, and it ran slower taking the bundles
     (docs/dev/performance.md); reach (m), tangential, rolling and linear: as in ``pair_force``;
-    one chunk of the common table runs ``_pair_rows``, a copy of the loop compiled for it, in
-    this function and in ``_pair_forces_serial`` alike (the same floats on one thread or two),
-    every other call the loop with the flags read at run time; flags (n,) int8:
+    one chunk of the common table (``_common_table``) runs ``_pair_rows``, a copy of the loop
+    compiled for it, here and in ``_pair_forces_serial`` alike (the same floats on one thread
+    or two); every other call runs the loop that reads the flags, and each row's form, at run
+    time; flags (n,) int8:
     the rows of the granules flagged ``coasting.COAST`` are skipped (``_pair_range``). One
     chunk runs in ``_pair_forces_serial`` (no parallel region to open)."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
-    if n_chunks == 1 and linear and tangential and not rolling:
+    if _common_table(n_chunks, linear, tangential, rolling):
         lost[0] = _pair_rows(
             x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, flags
         )
@@ -472,7 +473,7 @@ def _pair_forces_serial(
     """``pair_forces`` on one thread, chunk after chunk, without a parallel region."""
     n = x.shape[0]
     n_chunks = acc.shape[0]
-    if n_chunks == 1 and linear and tangential and not rolling:
+    if _common_table(n_chunks, linear, tangential, rolling):
         lost[0] = _pair_rows(
             x, v, w, a_prev, r, m, inertia, mat, params, start, nbr, hist, dt, reach, acc, flags
         )
@@ -482,6 +483,13 @@ def _pair_forces_serial(
             c * n // n_chunks, (c + 1) * n // n_chunks, x, v, w, a_prev, r, m, inertia, mat,
             params, start, nbr, hist, dt, reach, tangential, rolling, False, acc[c], flags,
         )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def _common_table(n_chunks, linear, tangential, rolling):
+    """Whether a pair pass runs ``_pair_rows``: one chunk, linear rows, friction (or tangential
+    damping), no rolling resistance."""
+    return n_chunks == 1 and linear and tangential and not rolling
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
