@@ -386,6 +386,7 @@ def test_no_private_member_of_another_package_is_read() -> None:
                 and not node.attr.startswith("__")
                 and not (isinstance(node.value, ast.Name) and node.value.id in {"self", "cls"})
                 and node.attr not in RAW_C_POINTERS.get(module, set())
+                and ast.unparse(node) != "os._exit"  # public: a forked child's way out
             ):
                 bad.append(f"{module}:{node.lineno}: {ast.unparse(node)}")
     assert bad == []

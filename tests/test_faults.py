@@ -132,6 +132,44 @@ def test_a_stop_signal_mid_run_stops_at_a_step_with_every_frame_written(tmp_path
     assert len(frames) == len(times) == summary["frames"]
 
 
+def _children(pid: int) -> list[int]:
+    """The processes ``pid`` started (Linux's /proc)."""
+    found = Path(f"/proc/{pid}/task").glob("*/children")
+    return [int(c) for path in found for c in path.read_text().split()]
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, ended but not yet reaped, does not)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except FileNotFoundError:
+        return False
+    return stat.rpartition(")")[2].split()[0] != "Z"
+
+
+def test_a_killed_run_leaves_its_paraview_writer_to_finish_and_exit(tmp_path):
+    """SIGKILL (the OOM killer) once frames are on disk: the run's ParaView writer process,
+    left alone, writes the frames it was sent, exits, and leaves every series readable."""
+    out = tmp_path / "run"
+    proc = perga("run", str(SEPARATOR), "-o", str(out), "--quiet")
+    index, deadline = out / "vtk" / "granules.pvd", time.monotonic() + 60
+    while (not index.exists() or index.read_text().count("<DataSet") < 3) and (
+        time.monotonic() < deadline
+    ):
+        time.sleep(0.02)
+    (writer,) = _children(proc.pid)
+    proc.kill()
+    proc.communicate(timeout=60)
+    while _running(writer) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert not _running(writer), "the writer process outlived the run"
+    frames = ET.parse(out / "vtk" / "granules.pvd").getroot().findall("./Collection/DataSet")
+    assert len(frames) >= 3
+    for index in (out / "vtk").glob("*.pvd"):
+        for entry in ET.parse(index).getroot().findall("./Collection/DataSet"):
+            meshio.read(out / "vtk" / entry.get("file"))
+
+
 def _unshare_works() -> bool:
     """Whether this machine lets a process mount a file system of its own (a user namespace)."""
     if shutil.which("unshare") is None:

@@ -7,11 +7,9 @@ type) and point and cell data of a grid; :func:`save` writes it as VTK's XML
 pyvista and meshio read).
 
 perga writes the file itself rather than through VTK's objects: building a
-``vtkUnstructuredGrid`` from NumPy arrays costs about 1 ms of Python a 300-granule frame, during
-which Python's GIL is held; written on a thread of its own
-(:class:`~perga.output.background.BackgroundRecorder`), that is time the simulation's thread
-waits. Here the arrays' bytes go to ``zlib.compress``, which releases the GIL, and the XML is a
-few lines of text (docs/dev/performance.md).
+``vtkUnstructuredGrid`` from NumPy arrays costs about 1 ms of Python a 300-granule frame. Here
+the arrays' bytes go to ``zlib.compress`` and the XML is a few lines of text
+(docs/dev/performance.md).
 """
 
 from __future__ import annotations

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import gc
 import hashlib
-import io
 import os
 import pickle
 from collections.abc import Iterator
@@ -42,6 +41,7 @@ from pathlib import Path
 
 import perga
 from perga.engine.simulation import Simulation
+from perga.output import relative_pickle
 from perga.output.files import write_all
 
 FORMAT = "perga-checkpoint 1"
@@ -71,31 +71,6 @@ def folder(run: Path) -> Path:
     return run / "checkpoints"
 
 
-class _RunPickler(pickle.Pickler):
-    """Pickles paths inside the run directory ``run`` relative to it (the recorders' files), so
-    that a run copied or moved elsewhere resumes into its own files."""
-
-    def __init__(self, stream: io.BytesIO, run: Path) -> None:
-        super().__init__(stream, protocol=pickle.HIGHEST_PROTOCOL)
-        self.run = run
-
-    def persistent_id(self, obj: object) -> str | None:
-        if isinstance(obj, Path) and obj.is_relative_to(self.run):
-            return obj.relative_to(self.run).as_posix()
-        return None
-
-
-class _RunUnpickler(pickle.Unpickler):
-    """Unpickles what :class:`_RunPickler` pickled, its paths inside the run directory ``run``."""
-
-    def __init__(self, stream: io.BytesIO, run: Path) -> None:
-        super().__init__(stream)
-        self.run = run
-
-    def persistent_load(self, pid: object) -> Path:
-        return self.run / str(pid)
-
-
 @contextmanager
 def _no_collection() -> Iterator[None]:
     """Python's cyclic garbage collector held off: (un)pickling makes many objects, and the
@@ -113,14 +88,12 @@ def dump(sim: Simulation, handed_over: dict[str, object], run: Path, case: str) 
     """A checkpoint of ``sim`` (now, between steps) and ``handed_over`` (the runner's state, its
     paths taken relative to the run directory ``run``) for the case whose digest is ``case``,
     as the bytes of its file."""
-    runner = io.BytesIO()
     with _no_collection():
-        _RunPickler(runner, run).dump(handed_over)
         body = pickle.dumps(
             {
                 "case": case,
                 "sim": sim,
-                "runner": runner.getvalue(),
+                "runner": relative_pickle.dumps(handed_over, run),
             },
             protocol=pickle.HIGHEST_PROTOCOL,
         )
@@ -196,5 +169,5 @@ def load(run: Path, case: str) -> tuple[Simulation, dict[str, object], Path]:
             continue
         runner = rest["runner"]
         assert isinstance(runner, bytes)
-        return sim, _RunUnpickler(io.BytesIO(runner), run).load(), path
+        return sim, relative_pickle.loads(runner, run), path
     raise CheckpointError(f"no checkpoint of {run} can be used: " + "; ".join(problems))

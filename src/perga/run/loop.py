@@ -24,11 +24,11 @@ from perga.case.schema import Case
 from perga.engine.simulation import Simulation
 from perga.model.compile import compile_case, load_system
 from perga.model.system import System
-from perga.output.background import BackgroundRecorder
 from perga.output.recorders import PhaseLock, Recorder, make_recorders
 from perga.output.scene_file import write_scene
 from perga.output.tables import drop_converted
 from perga.output.vtk import VtkRecorder
+from perga.output.writer_process import beside
 from perga.run import checkpoints
 from perga.run.directory import case_digest, prepare_directory, shown, write_case_copy
 from perga.run.guards import RunStoppedError, check_granules, check_population
@@ -60,14 +60,14 @@ class Writer:
 
 def writers(case: Case, directory: Path, system: System) -> list[Writer]:
     """The recorders ``output.record`` lists, each with its trigger: ParaView's every
-    ``output.vtk_every`` (default ``output.every``) on a thread of its own
-    (:class:`~perga.output.background.BackgroundRecorder`), the tables every ``output.every``."""
+    ``output.vtk_every`` (default ``output.every``) in a process of its own, started now
+    (:func:`~perga.output.writer_process.beside`), the tables every ``output.every``."""
     out = case.output
     recorders = make_recorders(out.record, directory, system, out.granule_table, out.tables)
     vtk_every = out.vtk_every if out.vtk_every is not None else out.every
     return [
         Writer(
-            BackgroundRecorder(recorder) if vtk else recorder,
+            beside(recorder, directory) if vtk else recorder,
             PhaseLock(vtk_every if vtk else out.every),
             vtk,
         )
@@ -141,19 +141,25 @@ def _build(
     write_case_copy(case, case_path, directory / "case.toml")
     record = case.output.record
     options = {"record_impacts": "impacts" in record, "track_energy": "energy" in record}
-    sim = Simulation(system, **options)
-    summary.dt, summary.granules, summary.hammers = (
-        system.granule_dt,
-        len(system.granules),
-        len(system.hammers),
-    )
-    assert system.plan is not None
-    summary.time_step = asdict(system.plan) | {"contact_model": system.contact_model.kind}
-    summary.contacts = [asdict(p) for p in system.pairs]
-    stop.check()
-    write_scene(directory, system)
-    n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
-    return _Run(case, directory, sim, writers(case, directory, system), n_steps)
+    run_writers = writers(case, directory, system)  # before the simulation's arrays exist
+    try:
+        sim = Simulation(system, **options)
+        summary.dt, summary.granules, summary.hammers = (
+            system.granule_dt,
+            len(system.granules),
+            len(system.hammers),
+        )
+        assert system.plan is not None
+        summary.time_step = asdict(system.plan) | {"contact_model": system.contact_model.kind}
+        summary.contacts = [asdict(p) for p in system.pairs]
+        stop.check()
+        write_scene(directory, system)
+        n_steps = math.ceil(case.solver.duration / sim.dt - 1e-9)
+    except BaseException:
+        for writer in run_writers:
+            writer.recorder.close(complete=False)
+        raise
+    return _Run(case, directory, sim, run_writers, n_steps)
 
 
 def resume_run(case: Case, directory: Path, progress: Progress | None = None) -> RunSummary:
