@@ -31,8 +31,10 @@ from perga.studies.jobs import ROW, Job
 ROOT = Path(__file__).resolve().parents[2]
 LOG = "executed.log"
 """The stand-in's log in the study folder: a line "start|end KEY PID" per event."""
-DELAY = 0.02
-"""Seconds a stand-in run takes: the study lasts long enough for a signal to land midway."""
+DELAY = 0.1
+"""Seconds a stand-in run takes: the study lasts long enough for a signal to land midway (at
+0.02 s, the 6 runs left of the adaptive search's first round of 12 on two workers took 0.06 s,
+and all of them could finish before a SIGINT sent at the sixth row stopped the study)."""
 
 
 def _tangential(p: dict[str, Any], _rng: np.random.Generator) -> float:
