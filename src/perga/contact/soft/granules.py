@@ -101,6 +101,79 @@ def pace_coasting(pacing: np.ndarray, tried: bool, coasted: int, n: int, n_steps
         pacing[1] = 1
 
 
+@numba.njit(cache=True)
+def overlapping_pairs(
+    x: np.ndarray,
+    r: np.ndarray,
+    start: np.ndarray,
+    nbr: np.ndarray,
+    hist: np.ndarray,
+    springs: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(i, j, δ = r_i + r_j − |x_i − x_j|, list entry) of the neighbour list's (``start``,
+    ``nbr``) pairs with δ > 0, with ``springs`` also those whose ``hist`` entry is non-zero;
+    in list order."""
+    m = nbr.size
+    i, j, delta, k = (
+        np.empty(m, np.int64),
+        np.empty(m, np.int64),
+        np.empty(m),
+        np.empty(m, np.int64),
+    )
+    found = 0
+    for a in range(start.size - 1):
+        for e in range(start[a], start[a + 1]):
+            b = nbr[e]
+            dx, dy = x[a, 0] - x[b, 0], x[a, 1] - x[b, 1]
+            overlap = r[a] + r[b] - math.sqrt(dx * dx + dy * dy)
+            if overlap > 0.0 or (springs and hist[e] != 0.0):
+                i[found], j[found], delta[found], k[found] = a, b, overlap, e
+                found += 1
+    return i[:found], j[:found], delta[:found], k[:found]
+
+
+@numba.njit(cache=True)
+def wall_overlaps(x: np.ndarray, r: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Overlaps (n, walls) of the discs (``x``, ``r``, m) with the wall rows (``kernel``'s
+    layout), m (≤ 0: no contact)."""
+    out = np.empty((x.shape[0], walls.shape[0]))
+    for s in range(walls.shape[0]):
+        a, b, c, d = walls[s, 1], walls[s, 2], walls[s, 3], walls[s, 4]
+        for g in range(x.shape[0]):
+            if walls[s, 0] == kernel.WALL_CHAMBER:
+                out[g, s] = r[g] + np.hypot(x[g, 0] - a, x[g, 1] - b) - c
+            else:
+                out[g, s] = r[g] - ((x[g, 0] - a) * c + (x[g, 1] - b) * d)
+    return out
+
+
+@numba.njit(cache=True)
+def tally_contacts(
+    n: int,
+    i: np.ndarray,
+    j: np.ndarray,
+    delta: np.ndarray,
+    walls: np.ndarray,
+    active: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per granule of ``n``: its contacts (the pairs ``i``, ``j`` with overlaps ``delta``,
+    the walls it overlaps (``walls`` (n, walls), m) and its ``active`` polygon entries) and the
+    largest of the pair and wall overlaps, m (0 without one)."""
+    count, overlap = np.zeros(n, np.int32), np.zeros(n)
+    for e in range(i.size):
+        for g in (i[e], j[e]):
+            count[g] += 1
+            overlap[g] = max(overlap[g], delta[e])
+    for g in range(n):
+        for s in range(walls.shape[1]):
+            if walls[g, s] > 0.0:
+                count[g] += 1
+            overlap[g] = max(overlap[g], walls[g, s])
+        for k in range(active.shape[1]):
+            count[g] += active[g, k]
+    return count, overlap
+
+
 def _held(a, n: int) -> np.ndarray:
     out = np.ascontiguousarray(np.asarray(a, dtype=bool).astype(np.int8))
     if out.shape != (n,):
@@ -593,26 +666,11 @@ class SoftGranules:
         if not self.pairs or self.start.shape[0] != self.n + 1:
             e = np.empty(0, np.int64)
             return e, e, np.empty(0), e
-        counts = np.diff(self.start)
-        i = np.repeat(np.arange(self.n), counts)
-        j = self.nbr
-        if j.size == 0:
-            e = np.empty(0, np.int64)
-            return e, e, np.empty(0), e
-        d = np.linalg.norm(self.x[i] - self.x[j], axis=1)
-        delta = self.r[i] + self.r[j] - d
-        k = np.flatnonzero((delta > 0) | (springs & (self.hist != 0)))
-        return i[k], j[k], delta[k], k
+        return overlapping_pairs(self.x, self.r, self.start, self.nbr, self.hist, springs)
 
     def _walls_overlap(self) -> np.ndarray:
         """Overlaps (n, n_walls) of the granules with the walls, m (≤ 0: no contact)."""
-        out = np.zeros((self.n, self.walls.shape[0]))
-        for s, (kind, a, b, c, d, _mat) in enumerate(self.walls):
-            if kind == kernel.WALL_CHAMBER:
-                out[:, s] = self.r + np.hypot(self.x[:, 0] - a, self.x[:, 1] - b) - c
-            else:
-                out[:, s] = self.r - ((self.x[:, 0] - a) * c + (self.x[:, 1] - b) * d)
-        return out
+        return wall_overlaps(self.x, self.r, self.walls)
 
     @staticmethod
     def _spring_energy(
@@ -690,23 +748,14 @@ class SoftGranules:
         centre. Builds the neighbour list first if a build is pending (``invalidate``, or no
         step yet).
         """
-        n = self.n
         i, j, delta, _ = self._pairs()
-        count = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
-        overlap = np.zeros(n)
-        np.maximum.at(overlap, i, delta)
-        np.maximum.at(overlap, j, delta)
-        walls = self._walls_overlap()
-        count += np.count_nonzero(walls > 0.0, axis=1)
-        if walls.size:
-            np.maximum(overlap, walls.max(axis=1), out=overlap)
         active = self.polygon_hist[:, :, HIST_ACTIVE] != 0.0
-        count += np.count_nonzero(active, axis=1)
+        count, overlap = tally_contacts(self.n, i, j, delta, self._walls_overlap(), active)
         outline = self._poly[0].outline()
-        for a, k in np.argwhere(active):
+        for a, k in zip(*np.nonzero(active), strict=True):
             d, _, _ = closest_feature(self.x[a, 0], self.x[a, 1], *outline, k)
             overlap[a] = max(overlap[a], self.r[a] - d)
-        return count.astype(np.int32), overlap
+        return count, overlap
 
     def max_overlap(self) -> float:
         """Largest overlap of any granule with a granule or wall, m (0 with no contact)."""
