@@ -8,7 +8,8 @@ call (the run and its closing, in which the last ParaView files are written: ``s
 (min-max). Fresh processes per run were tried first: their
 wall times spread by ±20 % on this machine, more than the share measured.
 
-With ``--against`` the ParaView files of the two trees' runs are compared byte for byte.
+With ``--against`` the ParaView files of the two trees' runs are compared byte for byte, and
+``trajectories.vtu`` line by line where its bytes differ (:mod:`trajectory_lines`).
 
     python benchmarks/output_share.py                                  # soft separator, 0.5 s
     python benchmarks/output_share.py --against HEAD~1 --repeats 5
@@ -28,6 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from trajectory_lines import same_lines
 from trees import worktree
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -60,10 +62,11 @@ def measured(src: Path, case: Path, seconds: float, repeats: int, out: Path) -> 
 
 
 def digest(folder: Path) -> str:
-    """SHA-256 over the ParaView files of a run (names and bytes, sorted by name)."""
+    """SHA-256 over the ParaView files of a run but ``trajectories.vtu`` (names and bytes,
+    sorted by name)."""
     sha = hashlib.sha256()
     for path in sorted((folder / "vtk").glob("*")):
-        if path.suffix in (".vtu", ".pvd"):
+        if path.suffix in (".vtu", ".pvd") and path.name != "trajectories.vtu":
             sha.update(path.name.encode() + path.read_bytes())
     return sha.hexdigest()[:16]
 
@@ -104,8 +107,13 @@ def main() -> None:
                 f"wall with vtk, this tree / {args.against}: "
                 f"{statistics.median(this) / statistics.median(other):.3f} (medians)"
             )
-            digests = {t: digest(Path(tmp) / str(k) / "vtk") for k, t in enumerate(trees)}
-            print(f"ParaView files byte-identical: {len(set(digests.values())) == 1} {digests}")
+            runs = [Path(tmp) / str(k) / "vtk" for k in range(2)]
+            digests = {t: digest(run) for t, run in zip(trees, runs, strict=True)}
+            same = len(set(digests.values())) == 1
+            print(f"ParaView files but trajectories.vtu byte-identical: {same} {digests}")
+            a, b = (run / "vtk" / "trajectories.vtu" for run in runs)
+            print(f"trajectories.vtu byte-identical: {a.read_bytes() == b.read_bytes()}, "
+                  f"same lines: {same_lines(a, b)}")  # fmt: skip
     print(f"load after: {os.getloadavg()[0]:.2f}")
 
 

@@ -369,18 +369,16 @@ def test_no_impacts_leaves_an_empty_readable_file(tmp_path: Path) -> None:
 def test_trajectories_identical_to_the_in_memory_build(run: Run) -> None:
     """The streamed file holds exactly (same float64 bits, same cells) what a build from every
     frame's positions and speeds held in memory holds (built here with pyvista, not perga's
-    writer)."""
+    writer): the points frame by frame, each granule's line through its own."""
     frames, n = len(run.frames), len(run.frames[0].positions)
-    track = np.stack([f.positions for f in run.frames], axis=1).reshape(-1, 2)
-    cells = np.concatenate(
-        [np.r_[frames, np.arange(k * frames, (k + 1) * frames)] for k in range(n)]
-    )
+    track = np.concatenate([f.positions for f in run.frames])
+    cells = np.concatenate([np.r_[frames, np.arange(k, frames * n, n)] for k in range(n)])
     points = np.column_stack((track, np.zeros(len(track))))
     reference = pv.UnstructuredGrid(cells, np.full(n, pv.CellType.POLY_LINE, np.uint8), points)
     speeds = [np.hypot(f.velocities[:, 0], f.velocities[:, 1]) for f in run.frames]
     expected_point_data = {
-        "time": np.tile(np.array([f.time for f in run.frames]), n),
-        "speed": np.stack(speeds, axis=1).ravel(),
+        "time": np.repeat(np.array([f.time for f in run.frames]), n),
+        "speed": np.concatenate(speeds),
     }
     written = pv.read(run.directory / "trajectories.vtu")
     assert np.array_equal(written.points, reference.points)
@@ -390,6 +388,7 @@ def test_trajectories_identical_to_the_in_memory_build(run: Run) -> None:
         assert np.array_equal(written.point_data[name], values), name
     assert np.array_equal(written.cell_data["id"], np.arange(n))
     assert not (run.directory / ".trajectories.f8").exists()
+    assert not list(run.directory.glob(".trajectories-*"))
 
 
 def held_bytes(recorder: VtkRecorder) -> int:

@@ -28,11 +28,15 @@ Files in ``RUN/vtk/`` (SI units; z = 0 everywhere):
   segments) as one closed VTK_POLY_LINE, written at the first frame (absent without a chamber).
 * ``trajectories.vtu`` (at ``close``): one VTK_POLY_LINE per granule (in the order of ids)
   through the frames it was present in; point data ``time`` (s) and ``speed`` (m/s), cell data
-  ``id``. Each frame's rows (time, id, x, y, speed) are appended to the scratch file
-  ``.trajectories.f8`` (raw float64, flushed every frame) rather than kept in memory, so the
-  recorder holds O(granules) whatever the number of frames; ``close`` (called by the runner
-  whatever ended the run) builds the file from it, in blocks of rows, and deletes it. Building
-  needs the file's points in memory once (~64 B per granule and frame).
+  ``id``. The points are in the order they were recorded, frame by frame, and each line lists
+  its own. As each frame is recorded its points, times and speeds go on through a zlib stream
+  each (:class:`~perga.output.vtk_grid.ArrayStream`, files ``.trajectories-NAME.z``) and its
+  rows (time, id, x, y, speed) are appended to the scratch file ``.trajectories.f8`` (raw
+  float64, flushed every frame), so the recorder holds O(granules) whatever the number of
+  frames, and ``close`` (called by the runner whatever ended the run) only orders the points
+  into lines (from the ids in the scratch file) and writes the file: it holds the compressed
+  arrays and ~16 B per granule and frame, then deletes the scratch file. A recorder taken from
+  a checkpoint rebuilds its streams from the scratch file.
 * ``impacts.vtu`` (at ``close``): a VTK_VERTEX per granule-hammer impact at its contact point;
   point data ``time`` (s), ``granule`` (id), ``hammer``, ``normal_impulse`` (N·s),
   ``granule_energy_gain`` (J), ``dissipated`` (J), ``specific_energy`` (½v_n², J/kg),
@@ -70,7 +74,7 @@ from perga.model.records import Events, Impact
 from perga.model.system import System
 from perga.output import paraview_state, vtk3d, vtk_grid
 from perga.output.files import reopen_at
-from perga.output.vtk_grid import POLY_LINE, POLYGON, Grid
+from perga.output.vtk_grid import POLY_LINE, POLYGON, ArrayStream, Grid
 
 FloatArray = NDArray[np.float64]
 
@@ -79,7 +83,7 @@ ROTOR_SIDES = 64
 CHAMBER_SEGMENTS = 256
 """Segments of the polyline drawn for the chamber's inner circle."""
 TRAJECTORY_BLOCK = 1 << 22
-"""Values (float64) of the trajectory scratch read at a time by ``close``: 32 MiB."""
+"""Values (float64) of the trajectory scratch read at a time to rebuild the streams: 32 MiB."""
 SCRATCH_COLUMNS = 5
 """Values per granule and frame in the trajectory scratch: time, id, x, y, speed."""
 
@@ -195,6 +199,8 @@ class VtkRecorder:
         self.frames = 0
         self.scratch = self.directory / ".trajectories.f8"
         self._scratch: BinaryIO | None = None
+        self._streams: dict[str, ArrayStream] | None = None
+        """The trajectories' points, times and speeds so far (None: to be rebuilt)."""
         self._impacts: list[Impact] = []
         self._impact_count = np.zeros(len(spec.granules), dtype=np.int64)  # by id, grows
         self._held = spec.has_bonds
@@ -207,18 +213,44 @@ class VtkRecorder:
 
     def __getstate__(self) -> dict[str, object]:
         """The recorder as it stands (a checkpoint), with the trajectory scratch file's length
-        in place of the open file."""
-        state = {k: v for k, v in self.__dict__.items() if k != "_scratch"}
+        in place of the open file and without the streams (rebuilt from the file)."""
+        state = {k: v for k, v in self.__dict__.items() if k not in ("_scratch", "_streams")}
         state["_scratch_size"] = None if self._scratch is None else self._scratch.tell()
         return state
 
     def __setstate__(self, state: dict[str, object]) -> None:
-        """Go on from a checkpoint: the scratch file cut back to its length then."""
+        """Go on from a checkpoint: the scratch file cut back to its length then; the streams
+        rebuilt from it at the next frame or at ``close``."""
         size = state.pop("_scratch_size")
         self.__dict__.update(state)
-        self._scratch = None
+        self._scratch, self._streams = None, None
         if isinstance(size, int):
             self._scratch = os.fdopen(reopen_at(self.scratch, size), "wb")
+
+    def _trajectory_streams(self) -> dict[str, ArrayStream]:
+        """The trajectories' streams, rebuilt from the scratch file's rows if need be."""
+        if self._streams is None:
+            assert self._scratch is not None
+            self._streams = {
+                name: ArrayStream(self.directory / f".trajectories-{name}.z", np.float64, k)
+                for name, k in (("points", 3), ("time", 1), ("speed", 1))
+            }
+            rows = self._scratch.tell() // (8 * SCRATCH_COLUMNS)
+            if rows:
+                shape = (rows, SCRATCH_COLUMNS)
+                scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=shape)
+                block = max(1, TRAJECTORY_BLOCK // SCRATCH_COLUMNS)
+                for a in range(0, rows, block):
+                    self._stream(np.asarray(scratch[a : a + block]))
+                del scratch
+        return self._streams
+
+    def _stream(self, rows: FloatArray) -> None:
+        """Rows (time, id, x, y, speed) on into the trajectories' streams."""
+        assert self._streams is not None
+        self._streams["points"].add(_lift(rows[:, 2:4]))
+        self._streams["time"].add(rows[:, 0])
+        self._streams["speed"].add(rows[:, 4])
 
     def _start(self, frame: Frame) -> None:
         """Material names, the chamber and the ParaView state, at the first frame."""
@@ -295,6 +327,8 @@ class VtkRecorder:
             self.rotor3d.add(t, self._rotor3d.mesh(at_axis, rotor_angle, rotor))
         rows = np.column_stack((np.full(len(p), t), g.ids, p, speed))
         assert self._scratch is not None
+        self._trajectory_streams()
+        self._stream(rows)
         self._scratch.write(rows.tobytes())
         self._scratch.flush()
         if self.frames == 0:
@@ -331,34 +365,25 @@ class VtkRecorder:
         self._write_impacts()
 
     def _write_trajectories(self) -> None:
-        """``trajectories.vtu`` from the scratch file (frame-major rows), read in blocks."""
+        """``trajectories.vtu`` from the streams, its lines ordered by the scratch file's ids."""
         assert self._scratch is not None
+        arrays = {name: stream.finish() for name, stream in self._trajectory_streams().items()}
         self._scratch.close()
-        size = self.scratch.stat().st_size // (8 * SCRATCH_COLUMNS)
+        size = arrays["time"].rows
         if size == 0:  # no granule in any frame: an empty file
             vtk_grid.save(vtk_grid.vertices(np.zeros((0, 2))), self.directory / "trajectories.vtu")
             return
         shape = (size, SCRATCH_COLUMNS)
         scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=shape)
         ids = np.asarray(scratch[:, 1]).astype(np.int64)
-        order = np.argsort(ids, kind="stable")  # granule-major, each in time order
-        points = np.zeros((size, 3))
-        time, speed = np.empty(size), np.empty(size)
-        block = max(1, TRAJECTORY_BLOCK // SCRATCH_COLUMNS)
-        for a in range(0, size, block):
-            rows = np.asarray(scratch[order[a : a + block]])
-            time[a : a + len(rows)] = rows[:, 0]
-            points[a : a + len(rows), :2] = rows[:, 2:4]
-            speed[a : a + len(rows)] = rows[:, 4]
         del scratch
-        granules, counts = np.unique(ids[order], return_counts=True)
-        offsets = np.concatenate(([0], np.cumsum(counts)))
-        trajectories = vtk_grid.grid(
-            points,
+        granules, counts = np.unique(ids, return_counts=True)
+        trajectories = Grid(
+            arrays["points"],
             POLY_LINE,
-            offsets,
-            np.arange(size, dtype=np.int64),
-            point_data={"time": time, "speed": speed},
+            np.concatenate(([0], np.cumsum(counts))),
+            np.argsort(ids, kind="stable"),  # each granule's points in time order
+            point_data={"time": arrays["time"], "speed": arrays["speed"]},
             cell_data={"id": granules},
         )
         vtk_grid.save(trajectories, self.directory / "trajectories.vtu")

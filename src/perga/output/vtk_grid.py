@@ -9,7 +9,9 @@ pyvista and meshio read).
 perga writes the file itself rather than through VTK's objects: building a
 ``vtkUnstructuredGrid`` from NumPy arrays costs about 1 ms of Python a 300-granule frame. Here
 the arrays' bytes go to ``zlib.compress`` and the XML is a few lines of text
-(docs/dev/performance.md).
+(docs/dev/performance.md). An array too long to hold, or known only piece by piece, goes
+through an :class:`ArrayStream` (one zlib stream, the bytes ``zlib.compress`` gives for the
+whole array) and into the grid as the :class:`Compressed` array it ends as.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import BinaryIO
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,17 +43,62 @@ TYPES = {
 
 
 @dataclass(frozen=True)
+class Compressed:
+    """An array already through zlib: its type, values per row (1 or 3), rows, and its zlib
+    block (one stream of its little-endian bytes)."""
+
+    dtype: np.dtype
+    components: int
+    rows: int
+    block: bytes
+
+    @property
+    def size(self) -> int:
+        """The array's bytes before compression."""
+        return self.rows * self.components * self.dtype.itemsize
+
+
+class ArrayStream:
+    """An array of ``dtype`` with ``components`` values per row, its rows added piece by piece
+    (:meth:`add`) through one zlib stream into the file ``path``: the stream's bytes are those
+    of ``zlib.compress`` over the whole array, however the rows come in pieces. Not picklable
+    (a zlib stream is not): whoever holds one rebuilds it from the rows."""
+
+    def __init__(self, path: Path, dtype: type, components: int = 1) -> None:
+        self.path = path
+        self.dtype = np.dtype(dtype).newbyteorder("<")
+        self.components = components
+        self.rows = 0
+        self._zlib = zlib.compressobj(ZLIB_LEVEL)
+        self._file: BinaryIO = open(path, "wb")  # noqa: SIM115 (closed by finish())
+
+    def add(self, values: ArrayLike) -> None:
+        """Append the rows ``values`` ((rows, components), or (rows,) for one component)."""
+        array = np.ascontiguousarray(values, dtype=self.dtype)
+        self.rows += len(array)
+        self._file.write(self._zlib.compress(array.tobytes()))
+
+    def finish(self) -> Compressed:
+        """The array as it ends (the file read back and removed)."""
+        self._file.write(self._zlib.flush())
+        self._file.close()
+        block = self.path.read_bytes()
+        self.path.unlink()
+        return Compressed(self.dtype, self.components, self.rows, block)
+
+
+@dataclass(frozen=True)
 class Grid:
     """An unstructured grid: points (n, 3), m; cells of one VTK type, cell c through the points
     ``connectivity[offsets[c]:offsets[c + 1]]``; data arrays by name, a value or row per point
-    or cell."""
+    or cell. The points and the data arrays may be :class:`Compressed` already."""
 
-    points: NDArray[np.float64]
+    points: NDArray[np.float64] | Compressed
     cell_type: int
     offsets: NDArray[np.int64]
     connectivity: NDArray[np.int64]
-    point_data: dict[str, NDArray] = field(default_factory=dict)
-    cell_data: dict[str, NDArray] = field(default_factory=dict)
+    point_data: dict[str, NDArray | Compressed] = field(default_factory=dict)
+    cell_data: dict[str, NDArray | Compressed] = field(default_factory=dict)
 
     @property
     def cells(self) -> int:
@@ -98,14 +146,16 @@ def save(mesh: Grid, path: Path) -> None:
     blocks: list[bytes] = []
     offset = 0
 
-    def arrays(data: Mapping[str, NDArray], indent: str) -> str:
+    def arrays(data: Mapping[str, NDArray | Compressed], indent: str) -> str:
         nonlocal offset
         lines = []
         for name, values in data.items():
-            block = _compressed(values)
-            components = f'NumberOfComponents="{values.shape[1]}" ' if values.ndim == 2 else ""
+            array = values if isinstance(values, Compressed) else _compressed(values)
+            block = _appended(array)
+            several = array.components > 1
+            components = f'NumberOfComponents="{array.components}" ' if several else ""
             lines.append(
-                f'{indent}<DataArray type="{TYPES[values.dtype]}" Name="{name}" '
+                f'{indent}<DataArray type="{TYPES[array.dtype]}" Name="{name}" '
                 f'{components}format="appended" offset="{offset}"/>\n'
             )
             blocks.append(block)
@@ -122,7 +172,7 @@ def save(mesh: Grid, path: Path) -> None:
         '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
         'header_type="UInt64" compressor="vtkZLibDataCompressor">\n'
         "  <UnstructuredGrid>\n"
-        f'    <Piece NumberOfPoints="{len(mesh.points)}" NumberOfCells="{mesh.cells}">\n'
+        f'    <Piece NumberOfPoints="{_rows(mesh.points)}" NumberOfCells="{mesh.cells}">\n'
         f"      <PointData>\n{arrays(mesh.point_data, '        ')}      </PointData>\n"
         f"      <CellData>\n{arrays(mesh.cell_data, '        ')}      </CellData>\n"
         f"      <Points>\n{arrays({'Points': mesh.points}, '        ')}      </Points>\n"
@@ -145,13 +195,22 @@ def _array(values: ArrayLike) -> NDArray:
     return array
 
 
-def _compressed(values: NDArray) -> bytes:
+def _rows(values: NDArray | Compressed) -> int:
+    """The rows of an array, compressed or not."""
+    return values.rows if isinstance(values, Compressed) else len(values)
+
+
+def _compressed(values: NDArray) -> Compressed:
+    """``values`` through zlib, one block of the whole array."""
+    raw = np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False)
+    components = values.shape[1] if values.ndim == 2 else 1
+    return Compressed(raw.dtype, components, len(raw), zlib.compress(raw.tobytes(), ZLIB_LEVEL))
+
+
+def _appended(array: Compressed) -> bytes:
     """An array's appended data: VTK's compression header (UInt64: blocks, block size, size of
     a partial last block (0: none), each block's compressed size) and the zlib block; one block
     of the whole array, none for an empty one."""
-    raw = np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False)
-    data = raw.tobytes()
-    if not data:
+    if array.size == 0:
         return np.array([0, 0, 0], dtype="<u8").tobytes()
-    block = zlib.compress(data, ZLIB_LEVEL)
-    return np.array([1, len(data), 0, len(block)], dtype="<u8").tobytes() + block
+    return np.array([1, array.size, 0, len(array.block)], dtype="<u8").tobytes() + array.block
