@@ -11,12 +11,19 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import perga.run.loop as loop
 from perga.model.records import Events
 from perga.output.vtk import VtkRecorder
-from perga.output.writer_process import WriterDiedError, WriterProcess, beside
+from perga.output.writer_process import (
+    WriterDiedError,
+    WriterProcess,
+    beside,
+    packed,
+    unpacked,
+)
 from perga.run import simulate
 
 CASES = Path(__file__).parents[2] / "cases"
@@ -177,3 +184,18 @@ def test_a_checkpoint_after_a_failed_frame_raises_it(tmp_path):
         pickle.dumps(writer)
     writer.close(complete=False)
     assert log.lines() == ["frame 0 []", "closed False"]
+
+
+def test_a_message_packed_with_its_arrays_apart_comes_back_equal():
+    """Arrays of every kind a frame holds (and a strided view, a 0-d and an empty one) among
+    other values, nested: equal values, types and shapes, read-only, in their places."""
+    base = np.arange(12.0).reshape(3, 4)
+    arrays = [base, base[:, ::2], np.array([True, False]), np.arange(3, dtype=np.int32),
+              np.full((), 2.5), np.zeros((0, 2)), np.array([7], dtype=np.int64)]  # fmt: skip
+    message = ("frame", {"a": arrays[:3], "b": (1.5, "x", None)}, arrays[3:])
+    back = unpacked(packed(message))
+    assert back[0] == "frame" and back[1]["b"] == (1.5, "x", None)
+    for sent, got in zip(arrays, back[1]["a"] + back[2], strict=True):
+        assert got.dtype == sent.dtype and got.shape == sent.shape
+        np.testing.assert_array_equal(got, sent)
+        assert not got.flags.writeable

@@ -7,7 +7,9 @@ The process is forked from the run's (``os.fork``: it starts in milliseconds wit
 recorder as it is, and may be started from a daemonic process such as a Dask worker). It is
 fed through a pipe (:func:`multiprocessing.Pipe`) each frame (the simulation's own copy) and
 the events recorded since the last frame, so its recorder sees the events as they stood at the
-frame and the files are the bytes a recorder called in line writes. Sending waits while the
+frame and the files are the bytes a recorder called in line writes. A message goes as its
+pickle with the arrays left out and their bytes after it (:func:`packed`): NumPy's own
+pickling of a frame's thirty small arrays costs more than their bytes. Sending waits while the
 pipe is full, so the process is at most a few frames behind. A failure in it (a full disk)
 is raised in the run at the next frame or at :meth:`WriterProcess.close`, every frame before
 it whole; the recorder is closed all the same. The process ignores SIGINT and SIGTERM (a
@@ -20,6 +22,7 @@ in line (:func:`beside`).
 
 from __future__ import annotations
 
+import io
 import os
 import pickle
 import select
@@ -29,6 +32,8 @@ from multiprocessing import Pipe
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from perga.model.frame import Frame
 from perga.model.records import Events
@@ -64,6 +69,53 @@ def _portable(exc: BaseException) -> BaseException:
     return exc
 
 
+class _ArraysApart(pickle.Pickler):
+    """A pickler that leaves each NumPy array out, naming its type and shape in its place,
+    and gathers its bytes in ``arrays``."""
+
+    def __init__(self, file: io.BytesIO, arrays: list[memoryview]) -> None:
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.arrays = arrays
+
+    def persistent_id(self, obj: object) -> tuple[str, tuple[int, ...]] | None:
+        if type(obj) is not np.ndarray:
+            return None
+        self.arrays.append(np.ascontiguousarray(obj).data)
+        return obj.dtype.str, obj.shape
+
+
+class _ArraysAfter(pickle.Unpickler):
+    """The unpickler of :class:`_ArraysApart`'s pickle: each array read-only over the
+    bytes ``after`` the pickle, in turn."""
+
+    def __init__(self, file: io.BytesIO, after: memoryview) -> None:
+        super().__init__(file)
+        self.after, self.at = after, 0
+
+    def persistent_load(self, pid: tuple[str, tuple[int, ...]]) -> np.ndarray:
+        dtype, shape = np.dtype(pid[0]), pid[1]
+        count = int(np.prod(shape))
+        array = np.frombuffer(self.after, dtype, count, self.at).reshape(shape)
+        self.at += count * dtype.itemsize
+        return array
+
+
+def packed(message: object) -> bytes:
+    """``message`` as the length of its pickle without its arrays (8 bytes), that pickle and
+    the arrays' bytes (:func:`unpacked` reads it)."""
+    arrays: list[memoryview] = []
+    head = io.BytesIO()
+    _ArraysApart(head, arrays).dump(message)
+    return b"".join([len(head.getbuffer()).to_bytes(8, "little"), head.getvalue(), *arrays])
+
+
+def unpacked(data: bytes) -> Any:
+    """The message :func:`packed` gave ``data`` for; its arrays read-only over ``data``."""
+    size = int.from_bytes(data[:8], "little")
+    view = memoryview(data)
+    return _ArraysAfter(io.BytesIO(view[8 : 8 + size]), view[8 + size :]).load()
+
+
 def _serve(recorder: Recorder, directory: Path, conn: Connection) -> None:
     """The process's loop: frames to ``recorder`` until told to close, or until the run's end
     of the pipe is gone (the run died: the files stay as they stand)."""
@@ -71,7 +123,7 @@ def _serve(recorder: Recorder, directory: Path, conn: Connection) -> None:
     failed = False
     while True:
         try:
-            message = conn.recv()
+            message = unpacked(conn.recv_bytes())
         except (EOFError, OSError):
             return
         kind = message[0]
@@ -158,7 +210,7 @@ class WriterProcess:
     def _send(self, message: tuple[Any, ...]) -> None:
         assert self._conn is not None
         try:
-            self._conn.send(message)
+            self._conn.send_bytes(packed(message))
         except OSError as exc:
             raise self._died(exc) from exc
 
