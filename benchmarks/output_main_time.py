@@ -17,9 +17,9 @@ import os
 import statistics
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+
+from call_timer import timed
 
 from perga.contact.soft.granules import SoftGranules
 from perga.output.writer_process import WriterProcess
@@ -31,19 +31,6 @@ PARTS = {
     "frames to the writer": (WriterProcess, "record"),
     "waiting at close": (WriterProcess, "close"),
 }
-
-
-def timed(spent: dict[str, float], part: str, method: Callable[..., Any]) -> Callable[..., Any]:
-    """``method`` adding its wall time to ``spent[part]``."""
-
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
-        try:
-            return method(*args, **kwargs)
-        finally:
-            spent[part] += time.perf_counter() - start
-
-    return wrapper
 
 
 def main() -> None:

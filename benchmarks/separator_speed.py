@@ -30,6 +30,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from call_timer import timed
 from trees import worktree
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,19 +57,9 @@ def one(case: str, duration: float, out: str) -> None:
 
     timers = {"step": 0.0, "kernel": 0.0, "coasted": 0, "granule_steps": 0}
 
-    def timed(name: str, method):
-        def wrapper(*args, **kwargs):
-            start = time.perf_counter()
-            try:
-                return method(*args, **kwargs)
-            finally:
-                timers[name] += time.perf_counter() - start
-
-        return wrapper
-
     stepping = "advance" if hasattr(Simulation, "advance") else "step"  # advance since 2026-11-27
-    setattr(Simulation, stepping, timed("step", getattr(Simulation, stepping)))
-    kernel_step = timed("kernel", SoftGranules.step)
+    setattr(Simulation, stepping, timed(timers, "step", getattr(Simulation, stepping)))
+    kernel_step = timed(timers, "kernel", SoftGranules.step)
 
     def counted(self, n_steps=1, **kwargs):
         """A kernel call from Python, timed, with its granule steps and those that coasted."""
