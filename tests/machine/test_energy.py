@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import numba
 import numpy as np
 import pytest
 
 from perga.analytic.impact import normal_impact
 from perga.engine import Simulation
 from perga.machine import units
-from perga.machine.energy import STATIC, _pivot_work
+from perga.machine.effects import ConstraintLosses
+from perga.machine.energy import IDLE_METER, STATIC, _pivot_work
 from perga.model import (
     ContactSpec,
     DriveSpec,
@@ -20,8 +24,10 @@ from perga.model import (
     RotorSpec,
     System,
 )
+from perga.model.compile import load_system
 from tests.engine.helpers import plate
 
+CASES = Path(__file__).resolve().parents[2] / "cases"
 R_G = 0.002  # m, granule radius
 
 
@@ -398,3 +404,19 @@ def test_the_corotating_floors_work_is_drive_work() -> None:
     ledger = sim.energy()
     assert ledger.drive_work > 0.0
     assert abs(ledger.closure) < 1e-12
+
+
+def test_the_compiled_meter_has_one_type_whatever_the_constraint_effects():
+    """A machine without constraint effects, with hinge friction, and with hinge friction and
+    swing stops hands the compiled meter (and the machine steps that call it) arguments of one
+    numba type, that of the idle meter: one compile for every machine."""
+    soft = CASES / "soft-separator.toml"
+    variants = [(CASES / "single-granule.toml", ()), (soft, ()),
+                (soft, ("hammers.swing_limit=1.0",))]  # fmt: skip
+    effects = []
+    for case, sets in variants:
+        _, system = load_system(case, overrides=sets)
+        sim = Simulation(system, track_energy=True)
+        effects.append(sum(isinstance(e, ConstraintLosses) for e in sim.machine.effects))
+        assert numba.typeof(sim.meter.compiled(1e-3)) == numba.typeof(IDLE_METER), case
+    assert effects == [0, 1, 2]

@@ -146,7 +146,8 @@ class EnergyMeter:
     def compiled(self, dt: float) -> tuple:
         """The arguments of :func:`meter_step` but the states and the contacts' moment, for
         steps of ``dt`` (internal time units)."""
-        losses = tuple(effect.losses() for effect in self._constraints) or _NO_LOSSES
+        losses = tuple(effect.losses() for effect in self._constraints)
+        losses += (_NO_LOSS,) * (CONSTRAINT_EFFECTS - len(losses))
         return (
             losses, self._pin_rows, self._pin_arms, self._pins.addresses(), self._rows,
             self._mass, self._moment, self._gx * dt, self._gy * dt,
@@ -181,13 +182,17 @@ class EnergyMeter:
         )
 
 
-_NO_LOSSES = ((np.zeros(2), np.zeros(0, dtype=np.uint64), np.zeros((0, 2), dtype=np.int64)),)
-"""The constraint losses' arguments of a machine without constraint effects (one of none: the
-compiled meter takes a tuple of one type)."""
+CONSTRAINT_EFFECTS = len(ConstraintLosses.__subclasses__())
+"""The constraint effects a machine can have, one of each kind (hinge friction, swing stops):
+the compiled meter always takes that many constraint losses, those of the effects a machine
+lacks empty, so that it (and the machine steps that call it) compiles once for every machine."""
+_NO_LOSS = (np.zeros(2), np.zeros(0, dtype=np.uint64), np.zeros((0, 2), dtype=np.int64))
+"""The constraint losses' arguments of an effect a machine lacks: no constraint."""
 
 IDLE_METER = (
-    _NO_LOSSES, np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2)), np.zeros(0, dtype=np.uint64),
-    np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), 0.0, 0.0, False, False, np.zeros(2),
+    (_NO_LOSS,) * CONSTRAINT_EFFECTS, np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2)),
+    np.zeros(0, dtype=np.uint64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), 0.0,
+    0.0, False, False, np.zeros(2),
 )  # fmt: skip
 """:meth:`EnergyMeter.compiled`'s arguments where no meter runs (compiled code that may meter
 takes a meter of this type; a run without one books nothing in it)."""

@@ -231,7 +231,7 @@ class SoftImpactLog:
         pairs = np.array(contacts, dtype=np.int64).reshape(-1, 2)
         return _other_contacts(
             pairs, self._hammer_of, self._movable, g.x, g.r, g.start, g.nbr, g.pairs,
-            g.polygon_hist[:, :, HIST_ACTIVE], g.walls, WALL_CHAMBER,
+            np.ascontiguousarray(g.polygon_hist[:, :, HIST_ACTIVE]), g.walls, WALL_CHAMBER,
         ).tolist()  # fmt: skip
 
     def _hammer_motion(
