@@ -180,6 +180,13 @@ def _lift(points: FloatArray) -> FloatArray:
     return out
 
 
+def _stream(streams: dict[str, ArrayStream], rows: FloatArray) -> None:
+    """Rows (time, id, x, y, speed) on into the trajectories' ``streams``."""
+    streams["points"].add(_lift(rows[:, 2:4]))
+    streams["time"].add(rows[:, 0])
+    streams["speed"].add(rows[:, 4])
+
+
 class VtkRecorder:
     """Writes the files listed in the module doc into ``directory / "vtk"`` for the system
     ``spec``: ``record(frame, events)`` a frame (``events``: everything so far), ``close()``
@@ -241,16 +248,9 @@ class VtkRecorder:
                 scratch = np.memmap(self.scratch, dtype=np.float64, mode="r", shape=shape)
                 block = max(1, TRAJECTORY_BLOCK // SCRATCH_COLUMNS)
                 for a in range(0, rows, block):
-                    self._stream(np.asarray(scratch[a : a + block]))
+                    _stream(self._streams, np.asarray(scratch[a : a + block]))
                 del scratch
         return self._streams
-
-    def _stream(self, rows: FloatArray) -> None:
-        """Rows (time, id, x, y, speed) on into the trajectories' streams."""
-        assert self._streams is not None
-        self._streams["points"].add(_lift(rows[:, 2:4]))
-        self._streams["time"].add(rows[:, 0])
-        self._streams["speed"].add(rows[:, 4])
 
     def _start(self, frame: Frame) -> None:
         """Material names, the chamber and the ParaView state, at the first frame."""
@@ -327,8 +327,7 @@ class VtkRecorder:
             self.rotor3d.add(t, self._rotor3d.mesh(at_axis, rotor_angle, rotor))
         rows = np.column_stack((np.full(len(p), t), g.ids, p, speed))
         assert self._scratch is not None
-        self._trajectory_streams()
-        self._stream(rows)
+        _stream(self._trajectory_streams(), rows)
         self._scratch.write(rows.tobytes())
         self._scratch.flush()
         if self.frames == 0:

@@ -132,18 +132,24 @@ def overlapping_pairs(
     return i[:found], j[:found], delta[:found], k[:found]
 
 
+@numba.njit(cache=True, inline="always")
+def wall_overlap(x: float, y: float, r: float, wall: np.ndarray) -> float:
+    """Overlap of the disc at (``x``, ``y``) of radius ``r`` (m) with the wall row ``wall``
+    (``kernel``'s layout), m (≤ 0: no contact)."""
+    a, b, c, d = wall[1], wall[2], wall[3], wall[4]
+    if wall[0] == kernel.WALL_CHAMBER:
+        return r + math.hypot(x - a, y - b) - c
+    return r - ((x - a) * c + (y - b) * d)
+
+
 @numba.njit(cache=True)
 def wall_overlaps(x: np.ndarray, r: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """Overlaps (n, walls) of the discs (``x``, ``r``, m) with the wall rows (``kernel``'s
-    layout), m (≤ 0: no contact)."""
+    """Overlaps (n, walls) of the discs (``x``, ``r``, m) with the wall rows, m
+    (:func:`wall_overlap`)."""
     out = np.empty((x.shape[0], walls.shape[0]))
     for s in range(walls.shape[0]):
-        a, b, c, d = walls[s, 1], walls[s, 2], walls[s, 3], walls[s, 4]
         for g in range(x.shape[0]):
-            if walls[s, 0] == kernel.WALL_CHAMBER:
-                out[g, s] = r[g] + np.hypot(x[g, 0] - a, x[g, 1] - b) - c
-            else:
-                out[g, s] = r[g] - ((x[g, 0] - a) * c + (x[g, 1] - b) * d)
+            out[g, s] = wall_overlap(x[g, 0], x[g, 1], r[g], walls[s])
     return out
 
 

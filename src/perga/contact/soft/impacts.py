@@ -26,7 +26,8 @@ import numpy as np
 
 from perga.contact.laws.row import LINEAR
 from perga.contact.soft import SoftGranules
-from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES, WALL_CHAMBER
+from perga.contact.soft.granules import wall_overlap
+from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
 from perga.contact.soft.polygon_set import (
     HIST_ACTIVE,
     HIST_DISSIPATED,
@@ -231,7 +232,7 @@ class SoftImpactLog:
         pairs = np.array(contacts, dtype=np.int64).reshape(-1, 2)
         return _other_contacts(
             pairs, self._hammer_of, self._movable, g.x, g.r, g.start, g.nbr, g.pairs,
-            np.ascontiguousarray(g.polygon_hist[:, :, HIST_ACTIVE]), g.walls, WALL_CHAMBER,
+            np.ascontiguousarray(g.polygon_hist[:, :, HIST_ACTIVE]), g.walls,
         ).tolist()  # fmt: skip
 
     def _hammer_motion(
@@ -345,8 +346,7 @@ class SoftImpactLog:
 
 
 @numba.njit(cache=True)
-def _other_contacts(pairs, hammer_of, movable, x, r, start, nbr, with_pairs, active, walls,
-                    chamber):  # fmt: skip
+def _other_contacts(pairs, hammer_of, movable, x, r, start, nbr, with_pairs, active, walls):
     """For each (granule row i, polygon k) of ``pairs``: i's contacts now (granules overlapping
     it in the neighbour list ``start``/``nbr`` if ``with_pairs``, walls it overlaps, polygons
     whose contact is ``active``) but those with the pieces of k's hammer h, plus, if
@@ -370,11 +370,7 @@ def _other_contacts(pairs, hammer_of, movable, x, r, start, nbr, with_pairs, act
         i, h = pairs[q, 0], hammer_of[pairs[q, 1]]
         count = touching[i]
         for s in range(walls.shape[0]):
-            a, b, c, d = walls[s, 1], walls[s, 2], walls[s, 3], walls[s, 4]
-            if walls[s, 0] == chamber:
-                count += r[i] + math.hypot(x[i, 0] - a, x[i, 1] - b) - c > 0.0
-            else:
-                count += r[i] - ((x[i, 0] - a) * c + (x[i, 1] - b) * d) > 0.0
+            count += wall_overlap(x[i, 0], x[i, 1], r[i], walls[s]) > 0.0
         for k in range(active.shape[1]):
             if active[i, k] != 0.0 and hammer_of[k] != h:
                 count += 1
