@@ -16,6 +16,11 @@ Every variant first runs each case once untimed (numba's cache).
     python benchmarks/separator_speed.py --against d605bbb     # side by side with a commit
     python benchmarks/separator_speed.py --cases soft-separator --repeats 5
     python benchmarks/separator_speed.py --cases soft-separator-1000 --seconds 0.05
+    python benchmarks/separator_speed.py --cases soft-separator-1000 --seconds 0.05 \
+        --setting contact_model.steps_per_contact=20      # this tree at a longer step as well
+
+``--setting KEY=VALUE`` (repeatable) adds this tree with that case override as one more
+variant, interleaved with the others: what a setting, such as a longer step, gains in time.
 """
 
 from __future__ import annotations
@@ -42,9 +47,9 @@ CASES = {
 """Name -> (case file, simulated seconds measured)."""
 
 
-def one(case: str, duration: float, out: str) -> None:
-    """Run ``case`` for ``duration`` s into ``out`` with the steps and the kernel timed; print
-    JSON."""
+def one(case: str, duration: float, out: str, overrides: list[str]) -> None:
+    """Run ``case`` for ``duration`` s into ``out``, with the case ``overrides``, the steps and
+    the kernel timed; print JSON."""
     import perga.contact.soft.model as soft
     from perga.case import load_case
     from perga.contact.soft.granules import SoftGranules
@@ -85,7 +90,9 @@ def one(case: str, duration: float, out: str) -> None:
 
         soft.machine_steps = shared
     path = Path(case)
-    loaded = load_case(path, overrides=[f"solver.duration={duration}", "solver.threads=1"])
+    loaded = load_case(
+        path, overrides=[f"solver.duration={duration}", "solver.threads=1", *overrides]
+    )
     prepare_directory(Path(out), overwrite=True)
     summary = run_case(loaded, path, Path(out))
     print(
@@ -103,12 +110,15 @@ def one(case: str, duration: float, out: str) -> None:
     )
 
 
-def measure(source: Path, case: Path, duration: float) -> dict[str, float]:
-    """One run in a subprocess with ``source`` (a src/ folder) first on the path."""
+def measure(
+    source: Path, case: Path, duration: float, overrides: tuple[str, ...] = ()
+) -> dict[str, float]:
+    """One run in a subprocess with ``source`` (a src/ folder) first on the path and the case
+    ``overrides``."""
     env = dict(os.environ, PYTHONPATH=str(source), NUMBA_NUM_THREADS="1")
     with tempfile.TemporaryDirectory() as out:
         done = subprocess.run(
-            [sys.executable, __file__, "--one", str(case), str(duration), out],
+            [sys.executable, __file__, "--one", str(case), str(duration), out, *overrides],
             env=env,
             capture_output=True,
             text=True,
@@ -126,27 +136,34 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--seconds", type=float, help="simulated seconds of every case")
     parser.add_argument("--against", help="a git ref to measure side by side")
-    parser.add_argument("--one", nargs=3, metavar=("CASE", "S", "OUT"), help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--setting", action="append", default=[], metavar="KEY=VALUE",
+        help="also this tree with this case override (repeatable: one variant each)",
+    )  # fmt: skip
+    parser.add_argument("--one", nargs="+", metavar="CASE S OUT KEY=VALUE", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        one(args.one[0], float(args.one[1]), args.one[2])
+        one(args.one[0], float(args.one[1]), args.one[2], args.one[3:])
         return
-    variants = {"this tree": ROOT / "src"}
+    variants: dict[str, tuple[Path, tuple[str, ...]]] = {"this tree": (ROOT / "src", ())}
+    for setting in args.setting:
+        variants[setting] = (ROOT / "src", (setting,))
     if args.against:
-        variants[args.against] = worktree(args.against)
+        variants[args.against] = (worktree(args.against), ())
     print(f"load average at start: {os.getloadavg()[0]:.2f}; cores: {os.cpu_count()}")
     for name in args.cases:
         case, duration = CASES[name]
         duration = args.seconds or duration
-        for source in variants.values():
-            measure(source, case, min(duration, 0.002))  # warm numba's cache
+        for source, overrides in variants.values():
+            measure(source, case, min(duration, 0.002), overrides)  # warm numba's cache
         runs: dict[str, list[dict[str, float]]] = {v: [] for v in variants}
         for _ in range(args.repeats):
-            for variant, source in variants.items():
-                runs[variant].append(measure(source, case, duration))
+            for variant, (source, overrides) in variants.items():
+                runs[variant].append(measure(source, case, duration, overrides))
         print(f"\n{name}: {duration} s simulated, {args.repeats} runs per variant, 1 thread")
         header = ("variant", "wall s/s", "step s/s", "kernel s/s", "outside kernel", "coasted")
-        print("{:>12} {:>9} {:>9} {:>10} {:>15} {:>8}".format(*header))
+        width = max(12, *map(len, variants))
+        print(f"{{:>{width}}} {{:>9}} {{:>9}} {{:>10}} {{:>15}} {{:>8}}".format(*header))
         for variant, results in runs.items():
             wall = statistics.median(r["wall"] / r["simulated"] for r in results)
             step = statistics.median(r["step"] / r["simulated"] for r in results)
@@ -155,12 +172,13 @@ def main() -> None:
             share = f"{100 * outside:.0f} %" if kernel > 0 else "-"
             coasted = statistics.median(r.get("coasted", 0.0) for r in results)
             print(
-                f"{variant:>12} {wall:9.1f} {step:9.1f} {kernel:10.1f} {share:>15} "
+                f"{variant:>{width}} {wall:9.1f} {step:9.1f} {kernel:10.1f} {share:>15} "
                 f"{100 * coasted:7.0f} %"
             )
-        if args.against:
-            ratios = [a["wall"] / b["wall"] for a, b in zip(*runs.values(), strict=True)]
-            print(f"wall ratio this tree / {args.against}: median {statistics.median(ratios):.3f} "
+        for variant in list(runs)[1:]:
+            pairs = zip(runs["this tree"], runs[variant], strict=True)
+            ratios = [a["wall"] / b["wall"] for a, b in pairs]
+            print(f"wall ratio this tree / {variant}: median {statistics.median(ratios):.3f} "
                   f"(runs {min(ratios):.3f}-{max(ratios):.3f})")  # fmt: skip
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
 

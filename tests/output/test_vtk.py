@@ -412,6 +412,7 @@ def held_bytes(recorder: VtkRecorder) -> int:
     return total
 
 
+@pytest.mark.slow  # 125 frames of 3,000 granules in a process of its own: 13-27 s
 def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
     """3,000 granules (the separator's 300, ten times over; never stepped): the arrays held are
     the same after 5 and 125 frames; over the last 60 frames the Python allocations made under

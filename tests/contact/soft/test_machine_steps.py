@@ -155,7 +155,9 @@ def test_whole_steps_release_granules_and_break_them_as_steps_do(tmp_path, actio
     [
         ("soft-separator.toml", ("effects.air_drag.drag_coefficient=0.9",)),
         ("bee-bread-separator.toml", ()),
-        ("soft-separator.toml", ("solver.threads=2",)),
+        pytest.param(  # compiles the two-thread kernel: about 85 s on a fresh clone
+            "soft-separator.toml", ("solver.threads=2",), marks=pytest.mark.slow
+        ),
         ("separator.toml", ()),
     ],
     ids=["air drag", "feed and outlet", "threads", "rigid"],

@@ -90,6 +90,7 @@ def test_tangential_history_survives_rebuilds():
     np.testing.assert_allclose(b.w, a.w, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
 def test_the_chunks_fix_the_results_whatever_the_threads():
     """A dense gas (overlapping start, many contacts a granule) in two chunks gives the same
     bits on one thread (chunk after chunk, no parallel region) and on two; in one chunk it
