@@ -425,7 +425,7 @@ def test_recorder_memory_does_not_grow_with_frames(tmp_path: Path) -> None:
     if os.environ.get("PERGA_MEMORY_PROBE") != "1":
         probe = f"{__file__}::test_recorder_memory_does_not_grow_with_frames"
         result = subprocess.run(
-            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", probe],
+            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "slow", probe],
             env={**os.environ, "PERGA_MEMORY_PROBE": "1"}, capture_output=True, text=True,
             timeout=600,
         )  # fmt: skip
