@@ -21,6 +21,7 @@ FIRST = ["solver.duration=0.3"]
 second run to start, load its case and be refused while the first writes."""
 
 
+@pytest.mark.slow  # five perga processes, three whole runs: 11-13 s
 def test_a_second_run_into_a_directory_being_written_is_refused(tmp_path: Path) -> None:
     """Two real processes: the second, with --overwrite (and a --resume), is refused with the
     first's pid while the first writes; the directory then holds exactly the first run's

@@ -141,6 +141,7 @@ def test_a_finished_study_runs_nothing_and_an_interrupted_one_only_what_is_missi
     ]
 
 
+@pytest.mark.slow  # a study on workers, interrupted and run again: 10-12 s
 def test_ctrl_c_leaves_a_study_that_resumes(tmp_path: Path) -> None:
     """SIGINT to ``perga sweep`` once the study has received a row (its table is first written
     then): exit 130 and a readable table of the rows received; the same command again runs only
