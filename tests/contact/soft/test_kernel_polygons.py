@@ -31,6 +31,7 @@ from perga.contact.soft.polygon_set import (
 )
 from perga.geometry.disc_polygon import bounding_radii, closest_feature, separation
 
+from .marks import TWO_THREADS
 from .test_polygons import (
     I_DISC,
     K_HERTZ,
@@ -472,7 +473,7 @@ def test_counts_follow_the_contact_flags_and_the_releases():
     assert g.counts[COUNT_CONTACT_CHANGES] == changes + active
 
 
-@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
+@TWO_THREADS
 def test_one_and_two_threads_give_identical_results():
     """Discs on a ring fall onto a turning FREE hexagon (moved between calls of 10 steps); they
     do not touch each other. Granule forces, polygon loads and history are summed in an order

@@ -13,6 +13,8 @@ from perga.contact.soft.kernel import COUNT_CONTACT_CHANGES
 from perga.engine.simulation import Simulation
 from perga.model.compile import compile_case
 
+from .marks import TWO_THREADS
+
 CASES = Path(__file__).resolve().parents[3] / "cases"
 SWEPT = ("granules.placement.inner_radius=0.09", "granules.placement.outer_radius=0.12")
 """The soft separator's granules put where the hammers sweep: impacts from the first steps."""
@@ -155,9 +157,7 @@ def test_whole_steps_release_granules_and_break_them_as_steps_do(tmp_path, actio
     [
         ("soft-separator.toml", ("effects.air_drag.drag_coefficient=0.9",)),
         ("bee-bread-separator.toml", ()),
-        pytest.param(  # compiles the two-thread kernel: about 85 s on a fresh clone
-            "soft-separator.toml", ("solver.threads=2",), marks=pytest.mark.slow
-        ),
+        pytest.param("soft-separator.toml", ("solver.threads=2",), marks=TWO_THREADS),
         ("separator.toml", ()),
     ],
     ids=["air drag", "feed and outlet", "threads", "rigid"],

@@ -15,6 +15,7 @@ from perga.contact.soft import (
 )
 
 from .helpers import MASS, R_CHAMBER, RADIUS, chamber_gas
+from .marks import TWO_THREADS
 
 
 def _chamber_gas(n, seed, *, overlapping=False, e=0.7, friction=0.5, rolling=0.0, speed=1.0):
@@ -90,7 +91,7 @@ def test_tangential_history_survives_rebuilds():
     np.testing.assert_allclose(b.w, a.w, rtol=1e-9, atol=1e-9)
 
 
-@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
+@TWO_THREADS
 def test_the_chunks_fix_the_results_whatever_the_threads():
     """A dense gas (overlapping start, many contacts a granule) in two chunks gives the same
     bits on one thread (chunk after chunk, no parallel region) and on two; in one chunk it

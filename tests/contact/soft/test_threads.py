@@ -19,6 +19,8 @@ from perga.contact.soft import threads as t
 from perga.engine import Simulation
 from perga.model.compile import compile_case
 
+from .marks import TWO_THREADS
+
 ROOT = Path(__file__).resolve().parents[3]
 
 
@@ -65,7 +67,7 @@ def fake_cores(monkeypatch: pytest.MonkeyPatch, *looks: int) -> None:
     monkeypatch.setattr("perga.contact.soft.model.RECHECK", 0.0)
 
 
-@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
+@TWO_THREADS
 def test_a_run_gives_the_same_bytes_on_one_thread_and_on_two(tmp_path, monkeypatch, request):
     """The soft separator with its work in two chunks (solver.threads = 2), run once with one
     core free throughout and once with the free cores going 2, 1, 2, ... from step to step (a
@@ -89,7 +91,7 @@ def test_a_run_gives_the_same_bytes_on_one_thread_and_on_two(tmp_path, monkeypat
     assert [f for f in files if (runs[0] / f).read_bytes() != (runs[1] / f).read_bytes()] == []
 
 
-@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
+@TWO_THREADS
 def test_a_run_follows_the_free_cores(monkeypatch, request):
     """Looking every step, the model's threads follow the free cores (never more than the
     chunks); ``threads`` keeps the most."""
@@ -135,7 +137,7 @@ def test_solver_threads_range(tmp_path, capsys, value, ok):
         assert "solver.threads" in capsys.readouterr().err
 
 
-@pytest.mark.slow  # compiles the two-thread kernel: about 85 s on a fresh clone
+@TWO_THREADS
 def test_granules_added_and_removed_keep_the_chunks(request):
     """A packed bed of discs (a lattice 2.5 % tighter than touching) in a chamber, with its
     work in two chunks, on one thread and on two: granules dropped in and two taken out midway
