@@ -20,6 +20,9 @@ can only be sped up by granules as slow as itself, and takes twice the fastest o
     python benchmarks/multirate_potential.py                       # both soft separators
     python benchmarks/multirate_potential.py --cases soft-separator --every 50
     python benchmarks/multirate_potential.py --local --factors 1 10 100
+
+Also printed: how many granules touch something (a granule, the wall or a hammer) at the
+sampled steps: what a contact must be resolved for, against the granules that are stepped.
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from perga.case import load_case
+from perga.contact.soft.granules import overlapping_pairs, wall_overlaps
+from perga.contact.soft.polygon_set import HIST_ACTIVE
 from perga.engine.simulation import Simulation
 from perga.model.compile import compile_case
 
@@ -80,6 +85,17 @@ def free_share(sim: Simulation, factor: int = 1, local: bool = False) -> float:
     return float(free.mean())
 
 
+def touching(sim: Simulation) -> int:
+    """The granules that overlap another granule or a wall, or act on a hammer polygon."""
+    g = sim.contacts.granules
+    i, j, _, _ = overlapping_pairs(g.x, g.r, g.start, g.nbr, g.hist, False)
+    touched = np.zeros(g.n, dtype=bool)
+    touched[i] = touched[j] = True
+    touched |= (wall_overlaps(g.x, g.r, g.walls) > 0.0).any(axis=1)
+    touched |= (g.polygon_hist[:, :, HIST_ACTIVE] != 0.0).any(axis=1)
+    return int(touched.sum())
+
+
 def _local_bounds(x, r, speed, tree, centres, rho, poly_speed, v_bound, span, fall):
     """Per granule, the speed it may gain within ``span`` (s): v_bound for the granules a hammer
     (bounding circle ``centres``, ``rho``, point speed ``poly_speed``) can strike, and for every
@@ -126,14 +142,17 @@ def main() -> None:
             (b, f): [] for b in bounds for f in args.factors
         }
         steps = round(duration / sim.dt)
+        touched = []
         for step in range(steps):
             if step % args.every == 0:
+                touched.append(touching(sim))
                 for b, f in shares:
                     shares[b, f].append(free_share(sim, f, b))
             sim.step()
         samples = len(shares[False, args.factors[0]])
         print(f"{name}: {len(sim.contacts.granules.r)} granules, k = {k} granule steps per "
               f"machine step, {samples} samples over {duration} s")  # fmt: skip
+        print(f"  granules touching something: mean {np.mean(touched):.1f}, most {max(touched)}")
         for (b, f), values in shares.items():
             s_ = np.array(values)
             cost = (1.0 - s_) + s_ / (k * f)

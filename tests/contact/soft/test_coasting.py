@@ -4,6 +4,7 @@ only tolerance an exact method has. Each scene is stepped twice from one state, 
 ``SoftGranules.coasting`` on and off, and each checks that granules did coast."""
 
 import copy
+import math
 from pathlib import Path
 
 import numpy as np
@@ -12,10 +13,12 @@ import pytest
 from perga.case import load_case
 from perga.contact.soft import SoftGranules, contact_parameters, uniform_table
 from perga.contact.soft.granules import looks_for_coasting, pace_coasting
+from perga.contact.soft.polygon_set import KINEMATIC, contact_table, polygon_set
 from perga.engine import Simulation
 from perga.model.compile import compile_case
 
 from .helpers import MASS, RADIUS, chamber_gas
+from .test_polygons import _box
 
 ROOT = Path(__file__).resolve().parents[3]
 STATE = ("x", "v", "w", "a_prev", "f", "tq", "hist", "wall_hist", "dissipated", "counts")
@@ -72,6 +75,73 @@ def test_a_pushed_row_rewinds_when_a_granule_outruns_the_bound() -> None:
     _assert_same(on, off)
     assert np.count_nonzero(np.hypot(*on.v.T) > 0.0) == n  # the push reached the row's end
     assert on.coasted > 0
+
+
+def test_a_slow_row_coasts_beside_a_fast_granule_and_rewinds_when_pushed() -> None:
+    """The pushed row above with a granule flying at 5 m/s far from it: the call's bound V is
+    then 10 m/s, which would keep the whole row from coasting (a call moves a granule up to
+    20·dt·V, far more than the row's 0.05 mm gaps). Each row granule's own bound, from its
+    speed and its partners', lets the row coast, so the push must be caught by the row
+    granules' own bounds (``coasting.outruns``), not by V."""
+    n = 12
+    r = np.full(n + 1, RADIUS)
+    x = np.zeros((n + 1, 2))
+    x[:n, 0] = np.arange(n) * (2 * RADIUS + 5e-5)
+    x[0, 0] = x[1, 0] - 1.8 * RADIUS
+    x[n] = (0.0, 50 * RADIUS)
+    row = contact_parameters("linear", 0.8, k_n=1e4)
+    g = SoftGranules(x, r, np.full(n + 1, MASS), uniform_table(row))
+    g.v[n] = (5.0, 0.0)
+    assert 20 * g.dt * 10.0 > 5e-5  # V alone would keep the row from coasting
+    on, off = _both(g, 30, 20)
+    _assert_same(on, off)
+    assert np.count_nonzero(np.hypot(*on.v[:n].T) > 0.0) == n  # the push reached the row's end
+    assert on.coasted > 2 * on.steps  # more than the flying granule alone
+
+
+@pytest.mark.parametrize("mirrored", [False, True])
+def test_a_granule_at_rest_keeps_clear_of_the_bound_of_its_partner(mirrored) -> None:
+    """Three granules in a row: A at rest, B at rest 15 µm from it, C pressed 0.1 mm into B and
+    moving onto it at 1 m/s. A's own bound is 0 (it and its partner B are at rest) and B's is
+    2 m/s (its partner C): the pair A-B, farther apart than dt·V, is within a call's reach of
+    B's bound, so A must not coast; B, pushed by C, reaches A within the first call. Mirrored:
+    the row's order reversed, so that either granule of the pair may own it in the list."""
+    gap, pressed = 1.5e-5, 1e-4
+    x = np.array([[0.0, 0.0], [2 * RADIUS + gap, 0.0], [4 * RADIUS + gap - pressed, 0.0]])
+    order = [2, 1, 0] if mirrored else [0, 1, 2]
+    row = contact_parameters("linear", 0.8, k_n=1e4)
+    g = SoftGranules(x[order], np.full(3, RADIUS), np.full(3, MASS), uniform_table(row))
+    g.v[order.index(2)] = (-1.0, 0.0)
+    assert 2 * 1.0 * g.dt < gap < 20 * g.dt * 2 * 1.0  # beyond dt·V, within 20 steps of B's bound
+    on, off = _both(g, 5, 20)
+    _assert_same(on, off)
+    assert off.v[order.index(0), 0] < 0.0  # B reached A
+
+
+def test_a_granule_a_hammer_can_strike_takes_the_calls_bound() -> None:
+    """A kinematic box moving at 1 m/s pressed 0.1 mm into granule B at rest, granule A at rest
+    20 µm beyond B, and a third granule flying at 2 m/s far away (V = 4 m/s). B is a polygon
+    candidate, so its bound is V whatever its partners' speeds: the pair A-B is within a call's
+    reach of it and A must not coast. Struck, B reaches A within the first call, slower than V,
+    which the call's own check does not catch."""
+    gap, pressed = 2e-5, 1e-4
+    x = np.array([[0.0, 0.0], [2 * RADIUS + gap, 0.0], [0.0, 50 * RADIUS]])
+    box = _box(0.01, 0.01, 3 * RADIUS + gap + 0.005 - pressed, 0.0)
+    polys = polygon_set(
+        [box], np.array([box.mean(axis=0)]), kind=[KINEMATIC], mass=[math.inf],
+        inertia=[math.inf], velocity=np.array([[-1.0, 0.0]]),
+    )  # fmt: skip
+    row = contact_parameters("linear", 0.8, k_n=1e4)
+    g = SoftGranules(
+        x, np.full(3, RADIUS), np.full(3, MASS), uniform_table(row), polygons=polys,
+        polygon_table=contact_table(1e4, 2e3, 0.8, 0.0),
+    )  # fmt: skip
+    g.v[2] = (2.0, 0.0)
+    assert 4.0 * g.dt < gap < 20 * g.dt * 4.0  # beyond dt·V, within 20 steps of V
+    on, off = _both(g, 5, 20)
+    _assert_same(on, off)
+    assert off.v[0, 0] < 0.0  # B reached A
+    assert on.coasted > 0  # the far granule
 
 
 def test_a_granule_falling_onto_a_held_one_meets_it_within_a_call() -> None:

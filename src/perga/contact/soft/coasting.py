@@ -6,18 +6,23 @@ A granule coasts from step k0 of a call for the S steps left when
 * ``kernel.mark_special`` did not flag it (no wall within reach, no polygon candidate, no
   bond), and
 * every pair of the neighbour list it is in holds no tangential spring and is farther apart
-  than r_i + r_j + (2S + 1)·dt·V, V a speed bound (``speed_bound``): twice the largest speed
-  and extrapolated speed |v + ½ dt a_prev| of any granule at k0, plus |g|·(S + 1)·dt.
+  than r_i + r_j + S·dt·(b_i + b_j) + dt·V (``coast``). V is the call's speed bound
+  (``speed_bound``): twice the largest speed and extrapolated speed |v + ½ dt a_prev| of any
+  granule at k0, plus |g|·(S + 1)·dt. b_i is granule i's own bound: V for a flagged granule
+  (a hammer or a wall may strike it), else twice the largest speed or extrapolated speed of i
+  and of its list partners, plus the same gravity term (b_i ≤ V).
 
-While every granule that does not coast keeps |v| and |v + ½ dt a_prev| within V (the kernel
-checks it after every step), a coasting granule moves at most S·dt·V and so does each of its
-partners; the pair pass reads it at most that far ahead of where it is, and a pair's reach
+While every granule that does not coast keeps |v| and |v + ½ dt a_prev| within its bound (the
+kernel checks it after every step: V for all of them, b_j for the unflagged, ``outruns``), a
+coasting granule moves at most S·dt·b_i and each of its partners at most S·dt·b_j; the pair
+pass reads them at most that far ahead of where they are, and a pair's reach
 (``kernel.pair_force``) is at most dt·V. So no pair of it comes within r_i + r_j + reach: the
 pair pass adds nothing for it, as step by step, and its only force is gravity. Its steps are the
 free path's arithmetic with zero pair forces (``stepping``), taken at once (``coast``): its
 accelerations once, its state in registers, its displacement, speed and extrapolated speed after
 each step recorded, so that the call's rebuild test and reach see the maxima they see step by
-step.
+step. With one bound V for all, the granules of a separator resting beside each other on the
+rotor could not coast while a struck granule flew elsewhere; with their own they can.
 
 The kernel rewinds the coasting granules to the step reached (``rewind``: their state at k0
 saved, those steps taken again) wherever the premise may fail: before a rebuild of the
@@ -30,7 +35,14 @@ import math
 import numpy as np
 from numba import njit
 
-from perga.contact.soft.stepping import accelerations, add_pair_forces, kick_drift, motion, store
+from perga.contact.soft.stepping import (
+    accelerations,
+    add_pair_forces,
+    kick_drift,
+    motion,
+    motion_of,
+    store,
+)
 from perga.geometry.disc_polygon import FASTMATH
 
 COAST = 2
@@ -46,14 +58,14 @@ def speed_bound(smax, umax, gravity, steps, dt):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
+def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima, bound):
     """Take the S steps left at once for every granule that may coast (module doc): marks it
-    COAST in flags (n,) int8, writes its contact force and torque (zero) to f and tq, and the
-    largest |x − x_ref|², |v|² and |v + ½ dt a_prev|² of the coasting granules after each step
-    to maxima[:S] (S, 3); returns, for ``rewind``, their indices (count,) int64, their x, y,
-    vx, vy, w before (5, count) and their accelerations a_x, a_y, α (3, count), and the
-    indices of the granules left unflagged (flags 0: the free path's list), each in increasing
-    order.
+    COAST in flags (n,) int8, writes its contact force and torque (zero) to f and tq, each
+    granule's own speed bound b_i (m/s) to bound (n,), and the largest |x − x_ref|², |v|² and
+    |v + ½ dt a_prev|² of the coasting granules after each step to maxima[:S] (S, 3); returns,
+    for ``rewind``, their indices (count,) int64, their x, y, vx, vy, w before (5, count) and
+    their accelerations a_x, a_y, α (3, count), and the indices of the granules left unflagged
+    (flags 0: the free path's list), each in increasing order.
 
     granules, props: as in ``kernel.Granules`` and ``kernel.GranuleProps``; acc, f, tq as in
     ``kernel.Work``; nbrs = (start, nbr, hist) the half list (another length of start: no
@@ -64,14 +76,29 @@ def coast(granules, props, acc, f, tq, x_ref, nbrs, flags, scalars, maxima):
     start, nbr, hist = nbrs
     steps, dt, gravity, damp, v_cap, speed = scalars
     n = x.shape[0]
+    pairs = start.shape[0] == n + 1  # else no list: no pairs
+    fastest = np.empty(n)  # each granule's largest speed² or extrapolated speed²
+    for i in range(n):
+        _, s2, u2 = motion_of(i, x, v, a_prev, x, 0.5 * dt)
+        fastest[i] = max(s2, u2)
+    local = fastest.copy()  # and its partners'
+    for i in range(n if pairs else 0):
+        for k in range(start[i], start[i + 1]):
+            j = nbr[k]
+            local[i] = max(local[i], fastest[j])
+            local[j] = max(local[j], fastest[i])
+    fall = math.sqrt(gravity[0] * gravity[0] + gravity[1] * gravity[1]) * (steps + 1) * dt
+    for i in range(n):
+        bound[i] = speed if flags[i] != 0 else min(2.0 * math.sqrt(local[i]) + fall, speed)
     near = flags != 0
-    span = (2 * steps + 1) * dt * speed * (1.0 + 1e-9)
-    for i in range(n if start.shape[0] == n + 1 else 0):  # no list: no pairs
+    ahead = steps * dt * (1.0 + 1e-9)
+    reach = dt * speed * (1.0 + 1e-9)
+    for i in range(n if pairs else 0):
         for k in range(start[i], start[i + 1]):
             j = nbr[k]
             dx = x[i, 0] - x[j, 0]
             dy = x[i, 1] - x[j, 1]
-            keep = r[i] + r[j] + span
+            keep = r[i] + r[j] + ahead * (bound[i] + bound[j]) + reach
             if hist[k] != 0.0 or dx * dx + dy * dy <= keep * keep:
                 near[i] = True
                 near[j] = True
@@ -184,3 +211,16 @@ def rewind(granules, flags, coasting, scalars):
         for _ in range(steps):
             px, py, vx, vy, wi = kick_drift(px, py, vx, vy, wi, ax, ay, alpha, dt, damp, v_cap)
         store(i, x, v, w, a_prev, px, py, vx, vy, wi, ax, ay, alpha)
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def outruns(v, a_prev, free, bound, h):
+    """Whether a granule of ``free`` (the unflagged granules that do not coast) has a speed or
+    extrapolated speed |v + h a_prev| (m/s) above its bound (``coast``); h = dt/2, s."""
+    for i in free:
+        b2 = bound[i] * bound[i]
+        ux = v[i, 0] + h * a_prev[i, 0]
+        uy = v[i, 1] + h * a_prev[i, 1]
+        if v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] > b2 or ux * ux + uy * uy > b2:
+            return True
+    return False

@@ -117,7 +117,7 @@ import numpy as np
 from numba import njit, prange
 from numba.core.errors import NumbaPerformanceWarning
 
-from perga.contact.soft.coasting import COAST, coast, rewind, speed_bound
+from perga.contact.soft.coasting import COAST, coast, outruns, rewind, speed_bound
 from perga.contact.soft.laws import (
     LINEAR,
     P_CLAMP,
@@ -1026,7 +1026,8 @@ def _advance(
     first_coast = 0
     free = np.empty(0, np.int64)
     speed = 0.0
-    outran = False  # a granule that does not coast went faster than speed in the last step
+    bound = np.empty(n)  # each granule's own speed bound while granules coast
+    outran = False  # a granule that does not coast went faster than its bound in the last step
     coasted = 0
     for step in range(n_steps):
         reach = dt * math.sqrt(umax)
@@ -1075,7 +1076,7 @@ def _advance(
             coasting, free = coast(
                 granules, props, work.acc, work.f, work.tq, x_ref,
                 (start, nbr, hist) if pairs else (start[:0], nbr, hist), flags,
-                (n_steps - step, dt, gravity, damp, settings.v_cap, speed), maxima,
+                (n_steps - step, dt, gravity, damp, settings.v_cap, speed), maxima, bound,
             )  # fmt: skip
             first_coast = step
             coasted += coasting[0].shape[0] * (n_steps - step)
@@ -1108,7 +1109,9 @@ def _advance(
             dissipated[DISSIPATED_WALLS] += chunk[c, 2]
             counts[COUNT_CONTACT_CHANGES] += int(chunk[c, 4])
             counts[COUNT_RELEASES] += int(chunk[c, 5])
-        outran = coasting[0].shape[0] > 0 and max(smax, umax) > speed * speed
+        outran = coasting[0].shape[0] > 0 and (
+            max(smax, umax) > speed * speed or outruns(v, granules.a_prev, free, bound, 0.5 * dt)
+        )
         if coasting[0].shape[0] > 0:
             dmax = max(dmax, maxima[step - first_coast, 0])
             smax = max(smax, maxima[step - first_coast, 1])
