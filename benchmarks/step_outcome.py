@@ -1,6 +1,7 @@
 """What a longer soft step changes in a separator's outcome, and what it saves: a case run at
-several ``contact_model.steps_per_contact`` over seeds, one thread, each run in this process
-one after the other (numba's cache warmed first).
+several values of one setting (``contact_model.steps_per_contact`` unless ``--key`` names
+another, such as ``contact_model.granule_substeps``) over seeds, one thread, each run in this
+process one after the other (numba's cache warmed first).
 
 Per run: the wall time of the run (``summary.json``), the granule-hammer impacts, their median
 restitution −v_n'/v_n (``impacts.csv``), the mean approach speed, the granules' mean energy
@@ -11,7 +12,8 @@ another seed would give: a chaotic many-granule run is compared by its statistic
 paths).
 
     python benchmarks/step_outcome.py                     # the 1,000-granule separator, 0.05 s
-    python benchmarks/step_outcome.py --steps 50 20 15 --seeds 7 8 9
+    python benchmarks/step_outcome.py --values 50 20 15 --seeds 7 8 9
+    python benchmarks/step_outcome.py --key contact_model.granule_substeps --values 5 25 50
 """
 
 from __future__ import annotations
@@ -57,7 +59,8 @@ def main() -> None:
         "--case", type=Path, default=ROOT / "benchmarks/cases/soft-separator-1000.toml"
     )
     parser.add_argument("--duration", type=float, default=0.05, help="simulated time, s")
-    parser.add_argument("--steps", type=float, nargs="+", default=[50.0, 20.0, 15.0])
+    parser.add_argument("--key", default="contact_model.steps_per_contact", help="the setting")
+    parser.add_argument("--values", nargs="+", default=["50", "20", "15"], help="its values")
     parser.add_argument("--seeds", type=int, nargs="+", default=[7, 8, 9])
     args = parser.parse_args()
     base = [f"solver.duration={args.duration!r}"]
@@ -66,23 +69,23 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         outcome(args.case, ["solver.duration=0.001"], Path(scratch) / "warm")
         for seed in args.seeds:  # seeds outermost: the settings' runs interleaved in time
-            for n in args.steps:
-                sets = [*base, f"contact_model.steps_per_contact={n!r}", f"solver.seed={seed}"]
+            for value in args.values:
+                sets = [*base, f"{args.key}={value}", f"solver.seed={seed}"]
                 result = outcome(args.case, sets, Path(scratch) / "run")
-                rows.append({"steps": n, "seed": seed, **result})
+                rows.append({"value": value, "seed": seed, **result})
     table = pd.DataFrame(rows)
-    columns = [c for c in table.columns if c not in ("steps", "seed")]
-    stats = table.groupby("steps", sort=False)[columns].agg(["mean", "std"])
-    first = args.steps[0]
+    columns = [c for c in table.columns if c not in ("value", "seed")]
+    stats = table.groupby("value", sort=False)[columns].agg(["mean", "std"])
+    first = args.values[0]
     print(f"\n{args.case.name}, {args.duration} s, seeds {args.seeds}: mean (sd) over the seeds;")
-    print(f"then each setting's shift from {first:g} steps per contact, in the seeds' mean sd")
-    print(f"{'steps per contact':>22}  " + "".join(f"{n:>20g}" for n in args.steps))
+    print(f"then each value's shift from {args.key} = {first}, in the seeds' mean sd")
+    print(f"{args.key.rsplit('.', 1)[-1]:>22}  " + "".join(f"{n:>20}" for n in args.values))
     for column in columns:
         mean, sd = stats[(column, "mean")], stats[(column, "std")]
-        cells = "".join(f"{f'{mean[n]:.4g} ({sd[n]:.2g})':>20}" for n in args.steps)
+        cells = "".join(f"{f'{mean[n]:.4g} ({sd[n]:.2g})':>20}" for n in args.values)
         shifts = "".join(
             f"{abs(mean[n] - mean[first]) / statistics.fmean([sd[n], sd[first]]):6.1f}"
-            for n in args.steps[1:]
+            for n in args.values[1:]
         )
         print(f"{column:>22}  {cells}  {shifts}")
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
